@@ -183,8 +183,13 @@ class ConvexPolygon:
 
 
 def signed_area(vertices: np.ndarray) -> float:
-    """Signed area (m^2): positive for counter-clockwise vertices (shoelace formula)."""
+    """Signed area (m^2): positive for counter-clockwise vertices (shoelace formula).
+
+    Computed relative to the first vertex, so that far from the origin the products
+    stay small and the result keeps its precision.
+    """
     v = np.asarray(vertices, dtype=float)
+    v = v - v[0]
     return 0.5 * float(np.sum(cross(v, np.roll(v, -1, axis=0))))
 
 
@@ -205,7 +210,7 @@ def check_convex_ccw(vertices: np.ndarray) -> None:
     """Raise ValueError unless ``vertices`` form a convex CCW polygon of positive area."""
     v = np.asarray(vertices, dtype=float)
     scale = max(float(np.max(np.abs(v - v.mean(axis=0)))), 1e-300)
-    area = signed_area(v - v.mean(axis=0))
+    area = signed_area(v)
     if area < 0:
         raise ValueError("polygon vertices are clockwise; list them counter-clockwise")
     if area <= CONVEXITY_RTOL * scale * scale:

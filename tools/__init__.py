@@ -1,0 +1,1 @@
+"""Maintenance tools of the course: the exercise generator and the demo."""

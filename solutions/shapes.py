@@ -246,3 +246,35 @@ def bounding_aabb(shape: Shape) -> AABB:
         return shape
     v = polygon_vertices(shape)
     return AABB(v.min(axis=0), v.max(axis=0))
+
+
+def translated(shape: Shape, offset) -> Shape:
+    """The same shape moved by ``offset`` (m)."""
+    d = np.asarray(offset, dtype=float)
+    if isinstance(shape, Circle):
+        return Circle(shape.center + d, shape.radius)
+    if isinstance(shape, AABB):
+        return AABB(shape.min_corner + d, shape.max_corner + d)
+    if isinstance(shape, OBB):
+        return OBB(shape.center + d, shape.half_extents, shape.angle)
+    return ConvexPolygon(shape.vertices + d)
+
+
+def inner_radius(shape: Shape) -> float:
+    """Radius (m) of a disc around the shape's centre that the shape contains.
+
+    A translation shorter than this cannot carry the shape across a wall of zero
+    thickness without some sampled position overlapping it; continuous detection uses
+    it to choose its step.  0 for zero-size shapes.
+    """
+    if isinstance(shape, Circle):
+        return shape.radius
+    if isinstance(shape, (AABB, OBB)):
+        return float(np.min(shape.half_extents))
+    v = shape.vertices
+    c = polygon_centroid(v)
+    edges = np.roll(v, -1, axis=0) - v
+    lengths = np.hypot(edges[:, 0], edges[:, 1])
+    keep = lengths > 0
+    distances = np.abs(cross(edges[keep], (c - v)[keep])) / lengths[keep]
+    return float(distances.min())

@@ -33,7 +33,7 @@ def moment_of_inertia(shape_local: Shape, mass: float) -> float:
     if isinstance(shape_local, (AABB, OBB)):
         w, h = 2 * shape_local.half_extents
         offset2 = float(shape_local.center @ shape_local.center)
-        return mass * ((w * w + h * h) / 12.0 + offset2)
+        return float(mass * ((w * w + h * h) / 12.0 + offset2))
     v = shape_local.vertices
     nxt = np.roll(v, -1, axis=0)
     cr = v[:, 0] * nxt[:, 1] - v[:, 1] * nxt[:, 0]

@@ -28,7 +28,7 @@ from .broadphase.aabb_array import aabb_array
 from .broadphase.brute_force import pairs_brute_force
 from .broadphase.quadtree import pairs_quadtree
 from .broadphase.sorted_grid_numpy import pairs_grid_numpy
-from .broadphase.uniform_grid import pairs_uniform_grid
+from .broadphase.uniform_grid import pairs_uniform_grid, suggest_cell_size
 from .continuous import swept_aabb, time_of_impact
 from .contact import Contact
 from .narrowphase.dispatch import collide
@@ -124,7 +124,7 @@ class World:
             self.solver.solve(self.bodies, self.manifolds, h)
             displacements = self.sweep_bullets(shapes, h)
             self.integrate_positions(displacements, h)
-            self.solver.correct_positions(self.bodies, self.manifolds, h)
+            self.solver.finish_step(self.bodies, self.manifolds, h)
             self.time += h
 
     # The stages -----------------------------------------------------------------
@@ -160,7 +160,7 @@ class World:
             if method == "brute_force":
                 pairs = sorted(pairs_brute_force(aabbs))
             elif method == "uniform_grid":
-                pairs = sorted(pairs_uniform_grid(aabbs, cell_size=_typical_cell_size(aabbs)))
+                pairs = sorted(pairs_uniform_grid(aabbs, cell_size=suggest_cell_size(aabbs)))
             elif method == "quadtree":
                 pairs = sorted(pairs_quadtree(aabbs))
             else:
@@ -213,9 +213,3 @@ class World:
             body.position = body.position + displacements.get(index, h * body.velocity)
             if not body.fixed_rotation:
                 body.angle += h * body.angular_velocity
-
-
-def _typical_cell_size(aabbs: np.ndarray) -> float:
-    """Twice the median body extent (m): each body then spans few cells."""
-    extents = np.maximum(aabbs[:, 2] - aabbs[:, 0], aabbs[:, 3] - aabbs[:, 1])
-    return max(2.0 * float(np.median(extents)), 1e-6)

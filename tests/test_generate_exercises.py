@@ -9,8 +9,8 @@ from tools import generate_exercises as gen
 
 #: The exercises the course promises students (module, qualname), at least.
 REQUIRED_STUBS = {
-    ("exercises.broadphase.uniform_grid", "pairs_uniform_grid_every_cell"),
-    ("exercises.broadphase.uniform_grid", "pairs_uniform_grid_center_cell"),
+    ("exercises.broadphase.uniform_grid", "pairs_grid_every_cell"),
+    ("exercises.broadphase.uniform_grid", "pairs_grid_center_cell"),
     ("exercises.narrowphase.projection", "project_vertices"),
     ("exercises.narrowphase.aabb_aabb", "aabbs_overlap"),
     ("exercises.narrowphase.polygon_polygon", "polygons_overlap"),

@@ -6,7 +6,8 @@ A :class:`Contact` between shape A and shape B holds
 - ``depth``: overlap along the normal, >= 0 (0 when the shapes touch);
 - ``points``: (k, 2) world contact points, k = 1 or 2 (a face-face contact gives a
   2-point manifold); each point is the midpoint between the two surfaces there;
-- ``depths``: (k,) overlap at each point, each >= 0; ``depth == depths.max()``;
+- ``depths``: (k,) overlap at each point, each >= 0 and at most ``depth`` (they can
+  differ from it by rounding on edges a few nm long);
 - ``feature_ids``: (k,) hashable keys, one per point, naming the features that touch
   (for example reference edge and incident vertex); the same features give the same
   key on the next step, which is what warm starting matches.  ``None`` when unknown.
@@ -48,7 +49,7 @@ class Contact:
 
     def flipped(self) -> "Contact":
         """The same contact seen from B: normal negated, depth and points unchanged."""
-        return Contact(-self.normal, self.depth, self.points, self.depths, self.feature_ids)
+        return Contact(0.0 - self.normal, self.depth, self.points, self.depths, self.feature_ids)
 
     def __repr__(self):
         return (f"Contact(normal={np.round(self.normal, 12).tolist()}, depth={self.depth!r}, "

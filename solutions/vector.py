@@ -37,8 +37,8 @@ def cross_scalar_vector(w: float, r) -> np.ndarray:
     """``w x r`` for a scalar angular velocity ``w`` (rad/s) and a vector ``r``:
     the velocity ``(-w * r.y, w * r.x)`` of a point at ``r`` from the rotation centre.
 
-    >>> cross_scalar_vector(2.0, np.array([1.0, 0.0]))
-    array([0., 2.])
+    >>> cross_scalar_vector(2.0, np.array([1.0, 0.0])).tolist()
+    [-0.0, 2.0]
     """
     r = np.asarray(r, dtype=float)
     return np.stack([-w * r[..., 1], w * r[..., 0]], axis=-1)

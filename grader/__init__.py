@@ -1,0 +1,1 @@
+"""The course autograder: student checks, class grading, reports, Gradescope export."""

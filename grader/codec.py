@@ -68,7 +68,17 @@ def encode_contact(contact) -> dict | None:
     if contact is None:
         return None
     points = [floats(p) for p in _rows(contact.points)]
-    return {CONTACT_TAG: True, "normal": floats(contact.normal), "depth": float(contact.depth), "points": points}
+    out = {CONTACT_TAG: True, "normal": floats(contact.normal), "depth": float(contact.depth), "points": points}
+    depths = getattr(contact, "depths", None)
+    if depths is not None:
+        out["depths"] = floats(depths)
+    return out
+
+
+def decode_contact(data: dict, contact_module):
+    """Rebuild a tagged contact with ``contact_module.Contact``."""
+    fields = {k: v for k, v in data.items() if k != CONTACT_TAG}
+    return contact_module.Contact(**fields)
 
 
 def floats(values) -> list[float]:

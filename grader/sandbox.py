@@ -39,7 +39,7 @@ from pathlib import Path
 from typing import Any
 
 HERE = Path(__file__).resolve().parent
-WORKER_FILES = ("worker.py", "codec.py")
+WORKER_FILES = ("worker.py", "codec.py", "scene_driver.py")
 SANDBOX_MOUNT = "/sandbox"
 #: First uid of the unprivileged users the workers run as (one per parallel slot).
 SANDBOX_UID_BASE = 61000
@@ -276,15 +276,19 @@ class Sandbox:
 
     # Calls ------------------------------------------------------------------------
     def call(self, module: str, function: str, args: list | tuple = (), kwargs: dict | None = None,
-             timeout: float | None = None, repeat: int = 1) -> CallResult:
-        """Call ``module.function(*args, **kwargs)`` in the worker (arguments already encoded)."""
+             timeout: float | None = None, repeat: int = 1, batch: bool = False) -> CallResult:
+        """Call ``module.function(*args, **kwargs)`` in the worker (arguments already encoded).
+
+        ``repeat`` calls it that many times (for timing); ``batch=True`` takes ``args``
+        as a list of argument lists and returns the list of values.
+        """
         if self.process is None or self.process.poll() is not None:
             if self.process is not None:
                 self.restarts += 1
             self.start()
         self._next_id += 1
         request = {"id": self._next_id, "module": module, "function": function, "args": list(args),
-                   "kwargs": kwargs or {}, "repeat": repeat}
+                   "kwargs": kwargs or {}, "repeat": repeat, "batch": batch}
         started = time.perf_counter()
         try:
             self.process.stdin.write((json.dumps(request, allow_nan=True) + "\n").encode())

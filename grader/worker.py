@@ -7,6 +7,9 @@ package in its working folder, and nothing of the grader but this file and
     {"id": 7, "module": "exercises.narrowphase.circle_circle",
      "function": "collide_circle_circle", "args": [...], "kwargs": {}, "repeat": 1}
 
+(with ``"batch": true``, ``args`` is a list of argument lists and the value is the
+list of results, one call each: fewer round trips for many random cases)
+
 and one JSON response per line on the file descriptor given as the first argument
 (standard output is the student's, for their prints)::
 
@@ -81,6 +84,8 @@ class Worker:
                 return codec.decode_shape(value, self.load("exercises.shapes"))
             if codec.BODY_TAG in value:
                 return codec.decode_body(value, self.load("exercises.shapes"), self.load("exercises.body"))
+            if codec.CONTACT_TAG in value:
+                return codec.decode_contact(value, self.load("exercises.contact"))
             if codec.ARRAY_TAG in value:
                 import numpy
                 return numpy.array(value[codec.ARRAY_TAG], dtype=float)
@@ -109,8 +114,12 @@ class Worker:
         real = sys.stdout, sys.stderr
         sys.stdout = sys.stderr = captured
         try:
-            for _ in range(int(request.get("repeat", 1))):
-                value = target(*args, **kwargs)
+            if request.get("batch"):
+                # args is a list of argument lists: one call each, values in order.
+                value = [target(*one, **kwargs) for one in args]
+            else:
+                for _ in range(int(request.get("repeat", 1))):
+                    value = target(*args, **kwargs)
         except NotImplementedError:
             return {"status": "not_implemented", "message": "not implemented yet"}
         except RecursionError as exc:
@@ -125,7 +134,8 @@ class Worker:
             sys.stdout, sys.stderr = real
         try:
             return {"status": "ok", "value": self.codec.encode_value(value),
-                    "args_after": [self.codec.encode_body(a) if type(a).__name__ == "Body" else None for a in args]}
+                    "args_after": [] if request.get("batch") else
+                    [self.codec.encode_body(a) if type(a).__name__ == "Body" else None for a in args]}
         except BaseException as exc:
             return {"status": "unreadable", "message": f"{type(exc).__name__}: {exc}"}
 

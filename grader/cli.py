@@ -1,0 +1,59 @@
+"""The ``grader`` command.
+
+    grader check [EXERCISE] [--package PATH]      students: public tests of one exercise
+    grader grade SUBMISSIONS... --out DIR          instructors: a whole class
+    grader gradescope-zip [--out FILE]             the same grading packaged for Gradescope
+    grader example-class --out DIR                 write the bundled example class
+    grader list                                    the tests, their points and visibility
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+#: subcommand -> (module, add-arguments function, main function, help)
+SUBCOMMANDS = {
+    "check": ("grader.check", "add_check_arguments", "main_check", "run the public tests of an exercise"),
+    "grade": ("grader.grade", "add_grade_arguments", "main_grade", "grade a class of submissions"),
+    "gradescope-zip": ("grader.gradescope", "add_gradescope_arguments", "main_gradescope_zip",
+                       "build autograder.zip for Gradescope"),
+    "example-class": ("grader.example_class", "add_example_class_arguments", "main_example_class",
+                      "write the bundled example class of submissions"),
+}
+
+
+def list_tests(args) -> int:
+    from .spec import load_spec
+
+    tests = load_spec()
+    width = max(len(t.name) for t in tests)
+    for test in tests:
+        print(f"{test.name:{width}s}  {test.exercise:9s} {test.points:4g} pt  {test.visibility:16s} {test.title}")
+    print(f"{len(tests)} tests, {sum(t.points for t in tests):g} points")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="grader", description="Autograder of the collision course.")
+    commands = parser.add_subparsers(dest="command", required=True)
+    for name, (module_name, add_arguments, main_name, help_text) in SUBCOMMANDS.items():
+        module = importlib.import_module(module_name)
+        sub = commands.add_parser(name, help=help_text, description=help_text)
+        getattr(module, add_arguments)(sub)
+        sub.set_defaults(handler=getattr(module, main_name))
+    commands.add_parser("list", help="list the tests").set_defaults(handler=list_tests)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.handler(args) or 0)
+    except KeyboardInterrupt:
+        print("interrupted: what was graded is kept; rerun the same command to finish", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

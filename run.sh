@@ -9,7 +9,21 @@ cd "$(dirname "$0")"
 VENV=.venv
 PY="$VENV/bin/python"
 
+system_packages() {
+    # bubblewrap isolates student code in the grader (see grader/sandbox.py).
+    if ! command -v bwrap >/dev/null 2>&1; then
+        if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+            (apt-get install -y -qq bubblewrap >/dev/null 2>&1 ||
+                (apt-get update -qq >/dev/null 2>&1 && apt-get install -y -qq bubblewrap >/dev/null 2>&1)) ||
+                echo "warning: could not install bubblewrap; the grader falls back to weaker isolation" >&2
+        else
+            echo "warning: bubblewrap (bwrap) is not installed; the grader falls back to weaker isolation" >&2
+        fi
+    fi
+}
+
 setup() {
+    system_packages
     if [ ! -x "$PY" ]; then
         python3 -m venv "$VENV"
     fi

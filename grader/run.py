@@ -74,8 +74,9 @@ def run_tests(student_dir: Path, tests: list[TestSpec], limits: Limits = Limits(
     results: list[TestResult] = []
     needs_reference = reference_dir is not None and any(
         "reference" in inspect.signature(load_all()[t.name]).parameters for t in tests)
-    with Sandbox(package_folder(student_dir), limits, slot, isolation) as student_box:
-        reference_box = Sandbox(reference_dir, limits, slot, isolation) if needs_reference else None
+    # Two sandbox users per slot: a student's fork bomb cannot starve the reference.
+    with Sandbox(package_folder(student_dir), limits, 2 * slot, isolation) as student_box:
+        reference_box = Sandbox(reference_dir, limits, 2 * slot + 1, isolation) if needs_reference else None
         try:
             student = StudentCode(student_box)
             reference = StudentCode(reference_box) if reference_box else None

@@ -296,15 +296,15 @@ class Sandbox:
         except (BrokenPipeError, OSError):
             return self._crashed(started)
         deadline = started + (timeout if timeout is not None else self.limits.call_timeout)
-        line = self._read_line(deadline)
+        outcome, line = self._read_line(deadline)
         elapsed = time.perf_counter() - started
-        if line is None:
-            if self.process is not None and self.process.poll() is None:
-                self._kill()
-                return CallResult("timeout", message=f"took longer than {deadline - started:g} s (wall clock); stopped",
-                                  elapsed=elapsed)
+        if outcome == "timeout":
+            self._kill()
+            return CallResult("timeout", message=f"took longer than {deadline - started:g} s (wall clock); stopped",
+                              elapsed=elapsed)
+        if outcome == "eof":
             return self._crashed(started)
-        if line == b"":
+        if outcome == "too_large":
             return CallResult("unreadable", message="the worker's answer was larger than the grader accepts",
                               elapsed=elapsed)
         try:
@@ -315,37 +315,64 @@ class Sandbox:
         if data.get("id") != self._next_id:
             self._kill()
             return CallResult("unreadable", message="the worker answered out of turn", elapsed=elapsed)
+        self._reap_strays(data.get("pid"))
         return CallResult(str(data.get("status")), data.get("value"), str(data.get("message", "")),
                           str(data.get("output", "")), elapsed, data.get("args_after") or [])
 
-    def _read_line(self, deadline: float) -> bytes | None:
-        """One response line; None on timeout or worker exit, b"" if over the size limit."""
+    def _read_line(self, deadline: float) -> tuple[str, bytes]:
+        """``("line", bytes)``, or ``("timeout" | "eof" | "too_large", b"")``."""
         while b"\n" not in self._buffer:
             remaining = deadline - time.perf_counter()
             if remaining <= 0:
-                return None
+                return "timeout", b""
             with selectors.DefaultSelector() as selector:
                 selector.register(self._response_fd, selectors.EVENT_READ)
                 if not selector.select(timeout=min(remaining, 0.5)):
-                    if self.process.poll() is not None:
-                        return None
                     continue
             chunk = os.read(self._response_fd, 1 << 20)
-            if not chunk:
-                return None
+            if not chunk:  # every writer closed: the worker is gone
+                return "eof", b""
             self._buffer += chunk
             if len(self._buffer) > RESPONSE_LIMIT:
                 self._kill()
                 self._buffer = b""
-                return b""
+                return "too_large", b""
         line, _, self._buffer = self._buffer.partition(b"\n")
-        return line
+        return "line", line
+
+    def _reap_strays(self, worker_pid) -> None:
+        """Kill every process of this sandbox's user but the worker itself.
+
+        Runs after each call, so nothing the student's code started (a background
+        process, the children of a fork bomb) outlives the call that started it.
+        Only with bubblewrap, where the user is this sandbox's alone.
+        """
+        if self.uid is None:
+            return
+        for entry in os.listdir("/proc"):
+            if not entry.isdigit():
+                continue
+            try:
+                with open(f"/proc/{entry}/status") as handle:
+                    fields = dict(line.split(":", 1) for line in handle if ":" in line)
+            except OSError:
+                continue
+            if int(fields.get("Uid", "-1").split()[0]) != self.uid:
+                continue
+            if fields.get("NSpid", "").split()[-1:] == [str(worker_pid)]:
+                continue
+            try:
+                os.kill(int(entry), signal.SIGKILL)
+            except OSError:
+                pass
 
     def _crashed(self, started: float) -> CallResult:
         process = self.process
         code = process.wait(timeout=10) if process is not None else None
         stderr = "".join(self._stderr).strip()
         self._kill()
+        if code is not None and code > 128 and self.isolation == "bwrap":
+            code = -(code - 128)  # bwrap's init reports a signal death as 128 + signal
         if code is not None and code < 0:
             name = signal.Signals(-code).name
             why = {"SIGXCPU": "CPU time limit reached", "SIGSEGV": "segmentation fault",

@@ -150,7 +150,7 @@ def main() -> None:
     for line in sys.stdin:
         request = json.loads(line)
         captured = CappedText(OUTPUT_LIMIT)
-        response = {"id": request.get("id"), "status": "ok", "value": None, "message": ""}
+        response = {"id": request.get("id"), "status": "ok", "value": None, "message": "", "pid": os.getpid()}
         response.update(worker.handle(request, captured))
         response["output"] = captured.getvalue()
         try:

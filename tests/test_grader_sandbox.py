@@ -1,0 +1,225 @@
+"""The sandbox: student code runs isolated, limited, and every failure is contained."""
+import os
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from grader.sandbox import Limits, Sandbox, bwrap_available
+
+REPO = Path(__file__).resolve().parent.parent
+needs_bwrap = pytest.mark.skipif(not bwrap_available(), reason="bubblewrap isolation needs bwrap and root")
+
+HOSTILE = '''
+import os, sys, time, subprocess
+
+def add(a, b):
+    return a + b
+
+def loud():
+    print("x" * 10_000_000)
+    return 1
+
+def stub():
+    raise NotImplementedError
+
+def boom():
+    raise ValueError("bad input")
+
+def forever():
+    while True:
+        pass
+
+def sleepy():
+    time.sleep(60)
+
+def exit_quietly():
+    sys.exit(0)
+
+def hard_exit():
+    os._exit(0)
+
+def segfault():
+    import ctypes
+    ctypes.string_at(0)
+
+def hog_memory():
+    blocks = []
+    while True:
+        blocks.append(bytearray(100 * 1024 * 1024))
+
+def fork_bomb():
+    children = 0
+    try:
+        while True:
+            if os.fork() == 0:
+                time.sleep(30)
+                os._exit(0)
+            children += 1
+    except OSError:
+        return children
+
+def read_file(path):
+    with open(path) as handle:
+        return handle.read()[:100]
+
+def write_file(path):
+    with open(path, "w") as handle:
+        handle.write("pwned")
+    return path
+
+def import_reference():
+    import solutions
+    return "imported"
+
+def leave_process():
+    subprocess.Popen(["sleep", "300"])
+    return os.getpid()
+
+def count_processes():
+    alive = 0
+    for p in os.listdir("/proc"):
+        if p.isdigit():
+            with open(f"/proc/{p}/stat") as handle:
+                alive += handle.read().rsplit(")", 1)[1].split()[0] != "Z"  # zombies hold no resources
+    return alive
+
+def whoami():
+    return [os.getuid(), os.getcwd()]
+
+def recurse(n=0):
+    return recurse(n + 1)
+
+class Sneaky:
+    def __eq__(self, other):
+        return True
+
+def sneaky():
+    return Sneaky()
+'''
+
+
+@pytest.fixture(scope="module")
+def package(tmp_path_factory):
+    root = tmp_path_factory.mktemp("submission") / "exercises"
+    root.mkdir()
+    (root / "__init__.py").write_text("")
+    (root / "hostile.py").write_text(textwrap.dedent(HOSTILE))
+    return root
+
+
+@pytest.fixture(scope="module")
+def sandbox(package):
+    with Sandbox(package, Limits(call_timeout=5.0, memory_bytes=1024**3)) as box:
+        yield box
+
+
+def test_a_call_returns_plain_data(sandbox):
+    result = sandbox.call("exercises.hostile", "add", [2, 3])
+    assert result.status == "ok" and result.value == 5
+
+
+def test_a_stub_says_not_implemented(sandbox):
+    result = sandbox.call("exercises.hostile", "stub")
+    assert result.status == "not_implemented" and result.message == "not implemented yet"
+
+
+def test_an_exception_is_reported_with_the_students_traceback(sandbox):
+    result = sandbox.call("exercises.hostile", "boom")
+    assert result.status == "error" and "ValueError: bad input" in result.message and "hostile.py" in result.message
+
+
+def test_printed_megabytes_are_capped(sandbox):
+    result = sandbox.call("exercises.hostile", "loud")
+    assert result.status == "ok" and len(result.output) < 20_000 and "more characters not shown" in result.output
+
+
+def test_recursion_limit_is_an_error(sandbox):
+    result = sandbox.call("exercises.hostile", "recurse")
+    assert result.status == "error" and "recursion" in result.message
+
+
+def test_an_object_with_a_lying_eq_cannot_pass_for_a_value(sandbox):
+    result = sandbox.call("exercises.hostile", "sneaky")
+    assert result.status == "unreadable"
+
+
+@pytest.mark.parametrize("function", ["forever", "sleepy"])
+def test_a_hang_times_out_and_the_next_call_works(sandbox, function):
+    started = time.perf_counter()
+    result = sandbox.call("exercises.hostile", function, timeout=1.0)
+    assert result.status == "timeout" and time.perf_counter() - started < 5
+    assert sandbox.call("exercises.hostile", "add", [1, 1]).value == 2
+
+
+@pytest.mark.parametrize("function, words", [("exit_quietly", "sys.exit"), ("hard_exit", "exited"),
+                                             ("segfault", "segmentation fault")])
+def test_exits_and_crashes_cost_only_that_call(sandbox, function, words):
+    result = sandbox.call("exercises.hostile", function)
+    assert result.status in ("error", "crashed") and words in result.message
+    assert sandbox.call("exercises.hostile", "add", [1, 2]).value == 3
+
+
+def test_a_memory_bomb_is_stopped(sandbox):
+    result = sandbox.call("exercises.hostile", "hog_memory", timeout=20.0)
+    assert result.status in ("error", "crashed") and ("memory" in result.message.lower() or "killed" in result.message)
+    assert sandbox.call("exercises.hostile", "add", [1, 2]).value == 3
+
+
+@needs_bwrap
+def test_a_fork_bomb_hits_the_process_limit(sandbox):
+    result = sandbox.call("exercises.hostile", "fork_bomb", timeout=20.0)
+    assert result.status == "ok" and result.value < 64
+
+
+@needs_bwrap
+def test_the_reference_solutions_cannot_be_read_or_imported(sandbox):
+    result = sandbox.call("exercises.hostile", "read_file", [str(REPO / "solutions" / "shapes.py")])
+    assert result.status == "error" and ("No such file" in result.message or "Permission" in result.message)
+    assert sandbox.call("exercises.hostile", "read_file", [str(REPO / "grader" / "spec" / "hidden.toml")]).status == "error"
+    assert sandbox.call("exercises.hostile", "import_reference").status == "error"
+
+
+@needs_bwrap
+def test_writes_outside_the_sandbox_change_nothing(sandbox, tmp_path):
+    target = tmp_path / "results.json"
+    result = sandbox.call("exercises.hostile", "write_file", [str(target)])
+    assert result.status == "error" or not target.exists()
+    assert not target.exists()
+    assert sandbox.call("exercises.hostile", "write_file", [str(REPO / "README.md")]).status == "error"
+
+
+@needs_bwrap
+def test_runs_as_an_unprivileged_user_in_its_own_folder(sandbox):
+    uid, cwd = sandbox.call("exercises.hostile", "whoami").value
+    assert uid != 0 and uid != os.getuid() and cwd == "/sandbox"
+
+
+@needs_bwrap
+def test_no_process_outlives_the_call_or_the_sandbox(package):
+    with Sandbox(package, slot=7) as box:
+        assert box.call("exercises.hostile", "leave_process").status == "ok"
+        uid = box.uid
+        # Inside the sandbox's process namespace: the init and the worker only.
+        assert box.call("exercises.hostile", "count_processes").value == 2
+    time.sleep(0.5)
+    leftovers = [p for p in os.listdir("/proc") if p.isdigit() and _uid_of(p) == uid]
+    assert leftovers == []
+
+
+def _uid_of(pid: str):
+    try:
+        with open(f"/proc/{pid}/status") as handle:
+            for line in handle:
+                if line.startswith("Uid:"):
+                    return int(line.split()[1])
+    except OSError:
+        return None
+
+
+def test_the_original_submission_is_never_changed(package):
+    before = {p: p.read_bytes() for p in package.rglob("*.py")}
+    with Sandbox(package) as box:
+        box.call("exercises.hostile", "write_file", ["exercises/hostile.py"])
+    assert {p: p.read_bytes() for p in package.rglob("*.py")} == before

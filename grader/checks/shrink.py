@@ -6,13 +6,15 @@ so the student sees a small case (round numbers, few bodies) instead of the rand
 """
 from __future__ import annotations
 
-from hypothesis import HealthCheck, find, settings
+from hypothesis import HealthCheck, Phase, find, settings
 from hypothesis.errors import NoSuchExample
 
 from ..outcome import StudentCallFailed
 
+# No "explain" phase: it re-runs the student's code many times to annotate the example,
+# which multiplied the grading time of a failing submission by ten.
 SHRINK_SETTINGS = settings(database=None, derandomize=True, max_examples=150, deadline=None,
-                           suppress_health_check=list(HealthCheck))
+                           phases=[Phase.generate, Phase.shrink], suppress_health_check=list(HealthCheck))
 
 
 class _Abort(Exception):

@@ -1,0 +1,263 @@
+"""Gradescope: the autograder archive, and the entry point it runs for each submission.
+
+    grader gradescope-zip [--out autograder.zip]
+    python -m grader.gradescope zip [--out autograder.zip]
+    python -m grader.gradescope run                 (what run_autograder calls)
+
+``autograder.zip`` holds, at its top (as Gradescope wants):
+
+- ``setup.sh``: run once, as root, when Gradescope builds the image: installs Python
+  3.11 or newer with ``venv``, bubblewrap, and the pinned packages of
+  ``requirements.txt`` into ``$AUTOGRADER_ROOT/venv``;
+- ``run_autograder``: run for every submission: grades ``$AUTOGRADER_ROOT/submission``
+  exactly as ``grader grade`` does and writes ``$AUTOGRADER_ROOT/results/results.json``;
+- ``grader/`` (with the whole test spec, hidden tests included), ``solutions/`` (the
+  reference engine the checks compare with; the sandbox never mounts it),
+  ``pyproject.toml`` and ``requirements.txt`` (pins taken from ``pyproject.toml``).
+
+``AUTOGRADER_ROOT`` defaults to ``/autograder``; set it to try the archive on a fake
+layout (``ROOT/source`` holding the unpacked archive, ``ROOT/submission``,
+``ROOT/run_autograder``), with ``AUTOGRADER_PYTHON`` naming a Python that has the
+requirements when ``setup.sh`` was not run there.
+
+On Gradescope the student code runs under bubblewrap, as an unprivileged user, when
+the container lets bubblewrap build a sandbox; otherwise it falls back to the plain
+isolation (resource limits only) and says so in the autograder's output, which only
+instructors see.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+import tomllib
+import zipfile
+from pathlib import Path
+
+from .results import RESULTS_NAME, write_results
+
+HERE = Path(__file__).resolve().parent
+REPO_ROOT = HERE.parent
+ZIP_NAME = "autograder.zip"
+DEFAULT_ROOT = "/autograder"
+ROOT_VARIABLE = "AUTOGRADER_ROOT"
+PYTHON_VARIABLE = "AUTOGRADER_PYTHON"
+#: Packages of the ``dev`` extras that the grader needs at run time.
+GRADER_EXTRAS = ("hypothesis", "tqdm")
+#: Folders of the repository that go into the archive, whole (less caches).
+BUNDLED_FOLDERS = ("grader", "solutions")
+BUNDLED_FILES = ("pyproject.toml",)
+FIXED_TIME = (2020, 1, 1, 0, 0, 0)  # every member's date: the same sources, the same archive
+
+SETUP_SH = r"""#!/usr/bin/env bash
+# Gradescope runs this once, as root, while it builds the autograder image.
+# It installs Python >= 3.11 with venv, bubblewrap (the sandbox of student code) and
+# the pinned packages of requirements.txt into $AUTOGRADER_ROOT/venv.
+set -euo pipefail
+export DEBIAN_FRONTEND=noninteractive
+ROOT="${AUTOGRADER_ROOT:-/autograder}"
+SOURCE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+
+apt-get update
+apt-get install -y --no-install-recommends ca-certificates python3 python3-venv python3-pip bubblewrap util-linux
+
+# The grader needs Python 3.11 or newer (tomllib; numpy's wheels).  Ubuntu 22.04 ships
+# 3.10 as python3, with python3.11 as a separate package.
+PYTHON=""
+for candidate in python3.13 python3.12 python3.11 python3; do
+    if command -v "$candidate" >/dev/null 2>&1 \
+            && "$candidate" -c 'import sys; sys.exit(0 if sys.version_info >= (3, 11) else 1)'; then
+        PYTHON="$candidate"
+        break
+    fi
+done
+if [ -z "$PYTHON" ]; then
+    apt-get install -y --no-install-recommends python3.11 python3.11-venv
+    PYTHON=python3.11
+fi
+if ! "$PYTHON" -c 'import ensurepip' >/dev/null 2>&1; then
+    apt-get install -y --no-install-recommends "$(basename "$PYTHON")-venv"
+fi
+
+"$PYTHON" -m venv "$ROOT/venv"
+"$ROOT/venv/bin/python" -m pip install --no-cache-dir --upgrade pip
+"$ROOT/venv/bin/python" -m pip install --no-cache-dir -r "$SOURCE/requirements.txt"
+
+# Fail the build now, not at the first submission, if the grader cannot load its spec.
+cd "$SOURCE"
+PYTHONPATH="$SOURCE" "$ROOT/venv/bin/python" -c \
+    "from grader.spec import load_spec; tests = load_spec(); print(len(tests), 'tests,', sum(t.points for t in tests), 'points')"
+"""
+
+RUN_AUTOGRADER = r"""#!/usr/bin/env bash
+# Gradescope runs this for every submission (as root, from $AUTOGRADER_ROOT).
+# It grades $AUTOGRADER_ROOT/submission and writes $AUTOGRADER_ROOT/results/results.json.
+set -uo pipefail
+ROOT="${AUTOGRADER_ROOT:-/autograder}"
+export AUTOGRADER_ROOT="$ROOT"
+SOURCE="$ROOT/source"
+PYTHON="${AUTOGRADER_PYTHON:-$ROOT/venv/bin/python}"
+if [ ! -x "$PYTHON" ]; then
+    echo "run_autograder: no Python at $PYTHON (did setup.sh run?)" >&2
+    exit 1
+fi
+mkdir -p "$ROOT/results"
+cd "$SOURCE"
+export PYTHONPATH="$SOURCE" PYTHONDONTWRITEBYTECODE=1 MPLBACKEND=Agg
+exec "$PYTHON" -m grader.gradescope run
+"""
+
+
+def requirements(pyproject: Path = REPO_ROOT / "pyproject.toml") -> list[str]:
+    """The pinned packages the grader needs: the project's dependencies, plus those of the
+    ``dev`` extras named in ``GRADER_EXTRAS``."""
+    project = tomllib.loads(Path(pyproject).read_text(encoding="utf-8"))["project"]
+    wanted = list(project.get("dependencies", []))
+    names = {_package_name(r) for r in wanted}
+    for requirement in project.get("optional-dependencies", {}).get("dev", []):
+        name = _package_name(requirement)
+        if name in GRADER_EXTRAS and name not in names:
+            wanted.append(requirement)
+            names.add(name)
+    return wanted
+
+
+def _package_name(requirement: str) -> str:
+    name = requirement
+    for mark in "=<>!~[;@ ":
+        name = name.split(mark, 1)[0]
+    return name.strip().lower().replace("_", "-")
+
+
+def bundled_files(repo_root: Path = REPO_ROOT) -> list[tuple[str, Path]]:
+    """(name in the archive, file) of every grader and reference file, sorted."""
+    files = []
+    for folder in BUNDLED_FOLDERS:
+        for path in sorted((repo_root / folder).rglob("*")):
+            relative = path.relative_to(repo_root)
+            if path.is_symlink() or not path.is_file():
+                continue
+            if "__pycache__" in relative.parts or path.suffix in (".pyc", ".pyo") \
+                    or any(part.startswith(".") for part in relative.parts):
+                continue  # caches, and hidden files (editor swap files, locks)
+            files.append((relative.as_posix(), path))
+    for name in BUNDLED_FILES:
+        files.append((name, repo_root / name))
+    return sorted(files)
+
+
+def _add(archive: zipfile.ZipFile, name: str, data: bytes, executable: bool = False) -> None:
+    info = zipfile.ZipInfo(name, date_time=FIXED_TIME)
+    info.external_attr = ((0o100755 if executable else 0o100644) & 0xFFFF) << 16
+    info.create_system = 3
+    info.compress_type = zipfile.ZIP_DEFLATED
+    archive.writestr(info, data)
+
+
+def build_autograder_zip(out: str | os.PathLike = ZIP_NAME, repo_root: Path = REPO_ROOT) -> Path:
+    """Write Gradescope's ``autograder.zip`` to ``out`` (atomically) and return its path."""
+    out = Path(out)
+    if out.is_dir():
+        out = out / ZIP_NAME
+    out.parent.mkdir(parents=True, exist_ok=True)
+    handle, temporary = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    os.close(handle)
+    try:
+        with zipfile.ZipFile(temporary, "w") as archive:
+            _add(archive, "setup.sh", SETUP_SH.encode(), executable=True)
+            _add(archive, "run_autograder", RUN_AUTOGRADER.encode(), executable=True)
+            _add(archive, "requirements.txt", ("\n".join(requirements(repo_root / "pyproject.toml")) + "\n").encode())
+            for name, path in bundled_files(repo_root):
+                _add(archive, name, path.read_bytes())
+        os.chmod(temporary, 0o644)
+        os.replace(temporary, out)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+    return out
+
+
+def autograder_root() -> Path:
+    """``$AUTOGRADER_ROOT``, or Gradescope's ``/autograder``."""
+    return Path(os.environ.get(ROOT_VARIABLE) or DEFAULT_ROOT)
+
+
+def run_autograder(root: str | os.PathLike | None = None, isolation: str = "auto",
+                   per_submission_seconds: float | None = None) -> int:
+    """Grade ``ROOT/submission`` and write ``ROOT/results/results.json``; the exit status.
+
+    What it prints goes to Gradescope's autograder output, which only instructors see.
+    When the grader itself fails, no results.json is written (Gradescope then tells the
+    student the autograder failed) and the reason is printed.
+    """
+    from .grade import DEFAULT_PER_SUBMISSION_SECONDS, GradingError, grade_submissions
+    from .spec import SpecError
+
+    root = Path(root) if root is not None else autograder_root()
+    submission = root / "submission"
+    results_path = root / "results" / RESULTS_NAME
+    if not submission.is_dir():
+        print(f"run_autograder: no submission folder at {submission}", flush=True)
+        return 1
+    started = time.perf_counter()
+    try:
+        with tempfile.TemporaryDirectory(prefix="grading-") as out:
+            rows = grade_submissions([submission], out, jobs=1, regrade=True, isolation=isolation,
+                                     per_submission_seconds=per_submission_seconds or DEFAULT_PER_SUBMISSION_SECONDS,
+                                     progress=False, html=False)
+    except (GradingError, SpecError) as exc:
+        print(f"run_autograder: the grader could not run: {exc}", flush=True)
+        return 1
+    row = rows[0]
+    if row["results"] is None:
+        print(f"run_autograder: the grader failed: {row['message']}", flush=True)
+        return 1
+    data = row["results"]
+    write_results(data, results_path)
+    print(f"{row['state']}: {data['score']:g} / {data['max_score']:g} points in "
+          f"{time.perf_counter() - started:.1f} s")
+    if row["state"] == "refused":
+        print(data["output"])
+    for test in data["tests"]:
+        extra = test.get("extra_data") or {}
+        print(f"  {test['score']:>5g} / {test['max_score']:<4g} {extra.get('status', test['status']):16s} "
+              f"{extra.get('test', test['name'])} ({test['visibility']})")
+    print(f"results: {results_path}", flush=True)
+    return 0
+
+
+# Command line -------------------------------------------------------------------------------
+def add_gradescope_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``grader gradescope-zip``."""
+    parser.add_argument("--out", default=ZIP_NAME, metavar="FILE",
+                        help="where to write the archive (default: %(default)s; a folder gets autograder.zip)")
+
+
+def main_gradescope_zip(args: argparse.Namespace) -> int:
+    """Run ``grader gradescope-zip``."""
+    path = build_autograder_zip(args.out)
+    with zipfile.ZipFile(path) as archive:
+        count = len(archive.infolist())
+    print(f"wrote {path} ({count} files, {path.stat().st_size / 1024:.0f} KiB): upload it as the "
+          "autograder of a Gradescope programming assignment")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m grader.gradescope", description=__doc__.split("\n\n")[0])
+    commands = parser.add_subparsers(dest="command", required=True)
+    run = commands.add_parser("run", help="grade $AUTOGRADER_ROOT/submission (what run_autograder calls)")
+    run.add_argument("--root", default=None, help=f"autograder root (default: ${ROOT_VARIABLE} or {DEFAULT_ROOT})")
+    run.add_argument("--isolation", choices=("auto", "bwrap", "plain"), default="auto")
+    run.add_argument("--timeout-submission", type=float, default=None, metavar="SECONDS")
+    add_gradescope_arguments(commands.add_parser("zip", help="build autograder.zip"))
+    args = parser.parse_args(argv)
+    if args.command == "zip":
+        return main_gradescope_zip(args)
+    return run_autograder(args.root, args.isolation, args.timeout_submission)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,331 @@
+"""Submissions: find them, name them, open them safely, and fingerprint them.
+
+A submission is a folder or a zip archive holding a copy of the ``exercises`` package
+(at its top, one folder down, or as the archive's top itself).  Each gets
+
+- an **id**, its file or folder name made safe for a folder name (``Alice Smith.zip``
+  becomes ``Alice_Smith``), the name of its folder in the output;
+- a **fingerprint**, the sha256 of what was handed in, so that a rerun can skip what is
+  already graded;
+- a folder to grade: the folder itself, or a fresh temporary copy of the archive's
+  regular files.
+
+Archives are untrusted.  :func:`safe_extract` uses the standard library's
+:mod:`zipfile` only, checks every member before it writes anything, and refuses the
+whole archive (raising :class:`SubmissionRefused` with a message for the student) when
+a member has an absolute path, a ``..`` component, a drive letter, is a symbolic link
+or another special file, is encrypted, or when the archive holds too many files or
+expands to too many bytes (a zip bomb: the bytes are counted as they are written, not
+taken from the headers).  Nothing outside the destination folder is ever written.
+
+Examples
+--------
+>>> submission_id("Alice Smith (late).zip")
+'Alice_Smith_late'
+>>> submission_id("../..")
+'submission'
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import shutil
+import stat
+import tempfile
+import unicodedata
+import zipfile
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path, PurePosixPath
+from typing import Iterator
+
+#: Most members one archive may hold.
+MAX_FILES = 2_000
+#: Most bytes one archive may expand to (all members together).
+MAX_TOTAL_BYTES = 64 * 1024**2
+#: Longest submission id (characters).
+MAX_ID_LENGTH = 80
+#: Names an id may not take: files the grader writes next to the submission folders.
+RESERVED_IDS = frozenset({"gradebook.csv", "index.html", "report.html", "class_report.html"})
+#: Folders and files that are not part of what was handed in (editor and OS litter).
+IGNORED_NAMES = frozenset({"__pycache__", "__MACOSX", ".DS_Store"})
+CHUNK = 1 << 16  # bytes read at a time
+
+
+class SubmissionRefused(Exception):
+    """A submission that cannot be graded; the message is written for the student."""
+
+
+class SubmissionPathError(ValueError):
+    """Paths given on the command line that are not folders or files at all."""
+
+
+@dataclass(frozen=True)
+class Submission:
+    """One submission of the batch.
+
+    Attributes
+    ----------
+    id : str
+        Safe, stable name (see :func:`submission_id`); its folder in the output.
+    path : Path
+        The folder or archive, absolute.
+    kind : str
+        ``"folder"`` or ``"zip"`` (every file that is not a folder is taken as an
+        archive; one that is not a zip is refused when opened, with a message).
+    """
+
+    id: str
+    path: Path
+    kind: str
+
+
+def submission_id(name: str) -> str:
+    """A safe folder name from a file or folder name (stable: the same name, the same id).
+
+    Accents are dropped; ASCII letters, digits, ``.``, ``_`` and ``-`` are kept, every other run of characters
+    becomes one ``_``; a ``.zip`` ending is dropped; leading dots and underscores are
+    stripped (no hidden folders, no ``..``).  An empty result is ``"submission"``.
+    """
+    name = unicodedata.normalize("NFKD", name.strip()).encode("ascii", "ignore").decode()
+    if name.lower().endswith(".zip"):
+        name = name[:-4]
+    safe = re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("._-")[:MAX_ID_LENGTH].strip("._-")
+    if not safe:
+        return "submission"
+    if safe.lower() in RESERVED_IDS:
+        safe = "submission_" + safe
+    return safe
+
+
+def discover(paths: list[str | os.PathLike]) -> list[Submission]:
+    """The submissions at ``paths`` (each a folder or an archive), ids made unique.
+
+    Every path is one submission; pass ``class/*`` to grade a folder of them.  Two
+    paths with the same name both get a short suffix made from their absolute path,
+    so ids stay the same from one run to the next.  Raises
+    :class:`SubmissionPathError` naming every path that does not exist (or is not a
+    regular file or folder) before anything is graded.
+    """
+    found: list[tuple[str, Path, str]] = []
+    missing: list[str] = []
+    seen: set[Path] = set()
+    for raw in paths:
+        path = Path(raw).expanduser()
+        if not path.exists():
+            missing.append(f"{raw}: no such file or folder")
+            continue
+        path = path.resolve()
+        if path in seen:
+            continue
+        seen.add(path)
+        if path.is_dir():
+            found.append((submission_id(path.name), path, "folder"))
+        elif path.is_file():
+            found.append((submission_id(path.name), path, "zip"))
+        else:
+            missing.append(f"{raw}: not a regular file or folder")
+    if missing:
+        raise SubmissionPathError("cannot grade these paths:\n  " + "\n  ".join(missing))
+    counts: dict[str, int] = {}
+    for name, _, _ in found:
+        counts[name] = counts.get(name, 0) + 1
+    submissions = []
+    for name, path, kind in found:
+        if counts[name] > 1:
+            name = f"{name}-{hashlib.sha256(str(path).encode()).hexdigest()[:6]}"
+        submissions.append(Submission(name, path, kind))
+    return submissions
+
+
+# Fingerprints --------------------------------------------------------------------------
+def _file_digest(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for chunk in iter(lambda: handle.read(CHUNK), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def fingerprint(path: str | os.PathLike) -> str:
+    """sha256 (hex) of a submission: the archive's bytes, or a folder's regular files.
+
+    A folder's fingerprint covers every regular file's relative path and contents,
+    in sorted order; symbolic links, ``__pycache__`` folders and ``.pyc`` files (which
+    running the code locally writes) are left out, since the grader never reads them.
+    """
+    path = Path(path)
+    if not path.is_dir():
+        return _file_digest(path)
+    digest = hashlib.sha256()
+    for root, dirs, files in os.walk(path):
+        dirs[:] = sorted(d for d in dirs if d not in IGNORED_NAMES and not os.path.islink(os.path.join(root, d)))
+        for name in sorted(files):
+            full = os.path.join(root, name)
+            if name in IGNORED_NAMES or name.endswith(".pyc") or not os.path.isfile(full) or os.path.islink(full):
+                continue
+            relative = os.path.relpath(full, path).replace(os.sep, "/")
+            digest.update(relative.encode("utf-8", "surrogateescape") + b"\0")
+            digest.update(_file_digest(Path(full)).encode() + b"\n")
+    return digest.hexdigest()
+
+
+# Safe extraction -------------------------------------------------------------------------
+def _shown(name: str) -> str:
+    """A member name as quoted in a message (control characters escaped, shortened)."""
+    text = repr(name)
+    return text if len(text) <= 120 else text[:117] + "..."
+
+
+def member_parts(info: zipfile.ZipInfo) -> tuple[str, ...] | None:
+    """The safe relative path of a member as parts; None for folders and ignored litter.
+
+    Raises :class:`SubmissionRefused` for a member the archive may not hold.
+    """
+    name = info.filename
+    if "\0" in name:
+        raise SubmissionRefused(f"the archive has a member with a NUL character in its name: {_shown(name)}")
+    if info.flag_bits & 0x1:
+        raise SubmissionRefused(f"the archive is password-protected ({_shown(name)}); hand in a plain zip")
+    unified = name.replace("\\", "/")
+    if unified.startswith("/") or re.match(r"^[A-Za-z]:", unified):
+        raise SubmissionRefused(f"the archive has a member with an absolute path: {_shown(name)}")
+    parts = tuple(p for p in PurePosixPath(unified).parts if p not in ("", "."))
+    if ".." in parts:
+        raise SubmissionRefused(f"the archive has a member whose path climbs out with '..': {_shown(name)}")
+    mode = info.external_attr >> 16
+    kind = stat.S_IFMT(mode)
+    if kind == stat.S_IFLNK or (info.create_system == 3 and kind not in (0, stat.S_IFREG, stat.S_IFDIR)):
+        what = "a symbolic link" if kind == stat.S_IFLNK else "a special file (not a regular file)"
+        raise SubmissionRefused(f"the archive has a member that is {what}: {_shown(name)}; "
+                                "zip your files, not links to them")
+    if info.is_dir() or kind == stat.S_IFDIR or not parts:
+        return None
+    if any(p in IGNORED_NAMES for p in parts):
+        return None
+    return parts
+
+
+def safe_extract(archive: str | os.PathLike, destination: str | os.PathLike, max_files: int = MAX_FILES,
+                 max_total_bytes: int = MAX_TOTAL_BYTES) -> list[Path]:
+    """Extract the regular files of a zip archive into ``destination`` (which must be empty).
+
+    Every member is checked before anything is written (see the module docstring);
+    bytes are counted while they are written, so a header that understates a
+    member's size does not get past the cap.  On refusal, whatever was written is
+    removed again and :class:`SubmissionRefused` says why.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    destination = Path(destination)
+    try:
+        archive_file = zipfile.ZipFile(archive)
+    except zipfile.BadZipFile:
+        raise SubmissionRefused("the file handed in is not a zip archive (or it is damaged); "
+                                "hand in a .zip holding your exercises folder") from None
+    except OSError as exc:
+        raise SubmissionRefused(f"the archive could not be read ({exc.strerror or exc})") from None
+    with archive_file:
+        members = archive_file.infolist()
+        if len(members) > max_files:
+            raise SubmissionRefused(f"the archive holds {len(members)} entries; at most {max_files} are accepted")
+        declared = sum(info.file_size for info in members)
+        if declared > max_total_bytes:
+            raise SubmissionRefused(f"the archive expands to {declared / 1024**2:.1f} MiB; at most "
+                                    f"{max_total_bytes / 1024**2:.0f} MiB are accepted (is it a zip bomb?)")
+        plan: list[tuple[zipfile.ZipInfo, tuple[str, ...]]] = []
+        taken: dict[tuple[str, ...], str] = {}
+        for info in members:
+            parts = member_parts(info)
+            if parts is None:
+                continue
+            if parts in taken:
+                raise SubmissionRefused(f"the archive holds {_shown(info.filename)} twice")
+            taken[parts] = info.filename
+            plan.append((info, parts))
+        folders = {key[:i] for key in taken for i in range(1, len(key))}
+        clash = next((name for key, name in taken.items() if key in folders), None)
+        if clash is not None:
+            raise SubmissionRefused(f"the archive holds {_shown(clash)} both as a file and as a folder")
+        written: list[Path] = []
+        total = 0
+        try:
+            for info, parts in plan:
+                target = destination.joinpath(*parts)
+                target.parent.mkdir(parents=True, exist_ok=True)
+                with archive_file.open(info) as source, open(target, "xb") as sink:
+                    written.append(target)
+                    for chunk in iter(lambda: source.read(CHUNK), b""):
+                        total += len(chunk)
+                        if total > max_total_bytes:
+                            raise SubmissionRefused(
+                                f"the archive expands to more than {max_total_bytes / 1024**2:.0f} MiB "
+                                "(is it a zip bomb?)")
+                        sink.write(chunk)
+        except SubmissionRefused:
+            _empty(destination)
+            raise
+        except (zipfile.BadZipFile, EOFError, ValueError, NotImplementedError) as exc:
+            _empty(destination)
+            raise SubmissionRefused(f"the archive is damaged or uses an unsupported format: {exc}") from None
+        except OSError as exc:
+            _empty(destination)
+            raise SubmissionRefused(f"a member of the archive could not be written: "
+                                    f"{exc.strerror or exc} ({_shown(getattr(exc, 'filename', '') or '')})") from None
+    return written
+
+
+def _empty(folder: Path) -> None:
+    for entry in list(folder.iterdir()) if folder.is_dir() else []:
+        if entry.is_dir() and not entry.is_symlink():
+            shutil.rmtree(entry, ignore_errors=True)
+        else:
+            entry.unlink(missing_ok=True)
+
+
+# Opening ----------------------------------------------------------------------------------
+def find_package(folder: Path) -> Path:
+    """The ``exercises`` package in a submission folder, or SubmissionRefused saying what is there."""
+    from .run import package_folder
+
+    try:
+        return package_folder(folder)
+    except FileNotFoundError:
+        pass
+    entries = sorted(p.name + ("/" if p.is_dir() else "") for p in folder.iterdir()
+                     if p.name not in IGNORED_NAMES)
+    seen = ", ".join(entries[:12]) + (", ..." if len(entries) > 12 else "") if entries else "nothing"
+    raise SubmissionRefused("no exercises package found: hand in the folder 'exercises' (with its "
+                            f"__init__.py), or a zip of it. Your submission holds: {seen}") from None
+
+
+@contextmanager
+def opened(submission: Submission, workdir: str | os.PathLike | None = None) -> Iterator[Path]:
+    """The submission as a folder to grade (a temporary copy for an archive), removed after.
+
+    A folder holding no package but exactly one zip archive is taken as that archive
+    (a student who uploads the archive itself to Gradescope, say).
+    """
+    path = submission.path
+    if submission.kind == "folder":
+        try:
+            find_package(path)
+            archives = []
+        except SubmissionRefused:
+            archives = [p for p in path.iterdir() if p.suffix.lower() == ".zip" and p.is_file()]
+        if len(archives) == 1:
+            with opened(Submission(submission.id, archives[0], "zip"), workdir) as folder:
+                yield folder
+        else:
+            yield path
+        return
+    folder = Path(tempfile.mkdtemp(prefix="submission-", dir=workdir))
+    try:
+        safe_extract(path, folder)
+        yield folder
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)

@@ -37,6 +37,8 @@ REPO_ROOT = Path(__file__).resolve().parent.parent
 HEADER = ("# Generated from {source} by tools/generate_exercises.py: edit solutions/, "
           "then run `python -m tools.generate_exercises`.\n")
 ABSOLUTE_IMPORT = re.compile(rf"^\s*(from|import)\s+{SOURCE_PACKAGE}\b")
+# Doctest lines import from the package by name; the student copy imports its own.
+DOCTEST_IMPORT = re.compile(rf"^(\s*(?:>>>|\.\.\.)\s+(?:from|import)\s+){SOURCE_PACKAGE}\b")
 
 
 class MarkerError(ValueError):
@@ -135,7 +137,7 @@ def strip_solutions(source: str, filename: str = "<string>") -> tuple[str, list[
         if begin_line is not None:
             block_has_code = block_has_code or bool(stripped and not stripped.startswith("#"))
             continue
-        out.append(line)
+        out.append(DOCTEST_IMPORT.sub(rf"\g<1>{TARGET_PACKAGE}", line))
     if begin_line is not None:
         raise MarkerError(f"{filename}:{begin_line}: '{BEGIN_MARKER}' is never closed by '{END_MARKER}'")
     student = "".join(out)

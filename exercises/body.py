@@ -1,0 +1,132 @@
+# Generated from solutions/body.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+"""Rigid bodies: mass properties, pose, velocities and material.
+
+A :class:`Body` owns one collision shape in its local frame, centred on the body's
+centre of mass (the body's ``position``).  Units: kg, kg m^2, m, rad, m/s, rad/s.
+
+- A static body (``is_static=True``) has infinite mass: its inverse mass and inverse
+  inertia are 0 and the solver never moves it.
+- ``fixed_rotation=True`` (or an AABB shape, which cannot turn) gives infinite inertia.
+- ``is_bullet=True`` asks the world for continuous detection against static bodies.
+- ``restitution`` e in [0, 1] and ``friction`` mu >= 0; a pair combines them as
+  products (as pymunk does): e = e_A e_B, mu = mu_A mu_B.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .shapes import AABB, OBB, Circle, ConvexPolygon, Shape, as_length, polygon_centroid
+from .vector import rotation_matrix
+
+
+def moment_of_inertia(shape_local: Shape, mass: float) -> float:
+    """Moment of inertia (kg m^2) about the local origin of a uniform-density shape.
+
+    Disc ``m r^2 / 2``; box ``m (w^2 + h^2) / 12`` with full widths; polygon by the
+    triangle-fan formula.  The local shape is assumed centred on the origin.
+    """
+    if isinstance(shape_local, Circle):
+        offset2 = float(shape_local.center @ shape_local.center)
+        return mass * (0.5 * shape_local.radius**2 + offset2)
+    if isinstance(shape_local, (AABB, OBB)):
+        w, h = 2 * shape_local.half_extents
+        offset2 = float(shape_local.center @ shape_local.center)
+        return float(mass * ((w * w + h * h) / 12.0 + offset2))
+    v = shape_local.vertices
+    nxt = np.roll(v, -1, axis=0)
+    cr = v[:, 0] * nxt[:, 1] - v[:, 1] * nxt[:, 0]
+    area2 = float(np.sum(cr))
+    terms = (v * v).sum(1) + (v * nxt).sum(1) + (nxt * nxt).sum(1)
+    return mass * float(np.sum(cr * terms)) / (6.0 * area2)
+
+
+@dataclass(eq=False)
+class Body:
+    """A rigid body; see the module docstring for units and conventions."""
+
+    shape: Shape
+    mass: float = 1.0
+    position: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    angle: float = 0.0
+    velocity: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    angular_velocity: float = 0.0
+    restitution: float = 0.0
+    friction: float = 0.0
+    is_static: bool = False
+    fixed_rotation: bool = False
+    is_bullet: bool = False
+    name: str = ""
+    inertia: float = field(init=False)
+
+    def __post_init__(self):
+        self.position = np.array(self.position, dtype=float).reshape(2)
+        self.velocity = np.array(self.velocity, dtype=float).reshape(2)
+        for label, vec in (("position", self.position), ("velocity", self.velocity)):
+            if not np.all(np.isfinite(vec)):
+                raise ValueError(f"body {label} must be finite, got {vec.tolist()}")
+        self.angle = float(self.angle)
+        self.angular_velocity = float(self.angular_velocity)
+        if not (math.isfinite(self.angle) and math.isfinite(self.angular_velocity)):
+            raise ValueError("body angle and angular_velocity must be finite")
+        if not self.is_static:
+            self.mass = as_length("body mass", self.mass)
+            if self.mass == 0:
+                raise ValueError("a dynamic body needs a mass > 0 (use is_static=True for an immovable one)")
+        self.restitution = as_length("restitution", self.restitution)
+        self.friction = as_length("friction", self.friction)
+        if isinstance(self.shape, AABB):
+            self.fixed_rotation = True
+        self.inertia = math.inf if (self.is_static or self.fixed_rotation) else moment_of_inertia(self.shape, self.mass)
+
+    # Constructors for shapes centred on the centre of mass.
+    @classmethod
+    def circle(cls, radius: float, **kwargs) -> "Body":
+        """A disc of ``radius`` (m) centred on the body."""
+        return cls(Circle((0.0, 0.0), radius), **kwargs)
+
+    @classmethod
+    def box(cls, width: float, height: float, **kwargs) -> "Body":
+        """A box ``width`` x ``height`` (m, full sizes) centred on the body."""
+        return cls(OBB((0.0, 0.0), (width / 2, height / 2), 0.0), **kwargs)
+
+    @classmethod
+    def polygon(cls, vertices_local, **kwargs) -> "Body":
+        """A convex CCW polygon, shifted so that its centroid is the body origin."""
+        v = np.asarray(vertices_local, dtype=float)
+        return cls(ConvexPolygon(v - polygon_centroid(v)), **kwargs)
+
+    @property
+    def inverse_mass(self) -> float:
+        """1/m (1/kg); 0 for a static body."""
+        return 0.0 if self.is_static else 1.0 / self.mass
+
+    @property
+    def inverse_inertia(self) -> float:
+        """1/I (1/(kg m^2)); 0 for a static body or a fixed rotation."""
+        return 0.0 if math.isinf(self.inertia) else 1.0 / self.inertia
+
+    def world_shape(self) -> Shape:
+        """The body's shape placed at its current position and angle (world frame)."""
+        s = self.shape
+        if isinstance(s, Circle):
+            return Circle(self.position + rotation_matrix(self.angle) @ s.center, s.radius)
+        if isinstance(s, AABB):
+            return AABB(s.min_corner + self.position, s.max_corner + self.position)
+        if isinstance(s, OBB):
+            return OBB(self.position + rotation_matrix(self.angle) @ s.center, s.half_extents, s.angle + self.angle)
+        return ConvexPolygon(s.vertices @ rotation_matrix(self.angle).T + self.position)
+
+    def velocity_at(self, point_world) -> np.ndarray:
+        """Velocity (m/s) of the material point at ``point_world``: v + w x r."""
+        r = np.asarray(point_world, dtype=float) - self.position
+        return self.velocity + self.angular_velocity * np.array([-r[1], r[0]])
+
+    def kinetic_energy(self) -> float:
+        """Translational plus rotational kinetic energy (J); 0 for a static body."""
+        if self.is_static:
+            return 0.0
+        rot = 0.0 if math.isinf(self.inertia) else 0.5 * self.inertia * self.angular_velocity**2
+        return 0.5 * self.mass * float(self.velocity @ self.velocity) + rot

@@ -1,0 +1,57 @@
+# Generated from solutions/contact.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+"""Contact data produced by the narrow phase.
+
+A :class:`Contact` between shape A and shape B holds
+
+- ``normal``: unit vector (2,) pointing from A to B;
+- ``depth``: overlap along the normal, >= 0 (0 when the shapes touch);
+- ``points``: (k, 2) world contact points, k = 1 or 2 (a face-face contact gives a
+  2-point manifold); each point is the midpoint between the two surfaces there;
+- ``depths``: (k,) overlap at each point, each >= 0 and at most ``depth`` (they can
+  differ from it by rounding on edges a few nm long);
+- ``feature_ids``: (k,) hashable keys, one per point, naming the features that touch
+  (for example reference edge and incident vertex); the same features give the same
+  key on the next step, which is what warm starting matches.  ``None`` when unknown.
+
+Moving B by ``depth * normal`` (or A by the opposite) separates the shapes.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class Contact:
+    """One contact manifold between shape A and shape B; see the module docstring."""
+
+    normal: np.ndarray
+    depth: float
+    points: np.ndarray
+    depths: np.ndarray | None = None
+    feature_ids: tuple | None = None
+
+    def __post_init__(self):
+        normal = np.array(self.normal, dtype=float).reshape(2)
+        points = np.array(self.points, dtype=float).reshape(-1, 2)
+        depth = max(float(self.depth), 0.0)
+        depths = np.full(len(points), depth) if self.depths is None else np.maximum(np.array(self.depths, dtype=float).reshape(-1), 0.0)
+        if len(depths) != len(points):
+            raise ValueError(f"{len(points)} contact points but {len(depths)} depths")
+        if self.feature_ids is not None and len(self.feature_ids) != len(points):
+            raise ValueError(f"{len(points)} contact points but {len(self.feature_ids)} feature ids")
+        for arr in (normal, points, depths):
+            arr.setflags(write=False)
+        object.__setattr__(self, "normal", normal)
+        object.__setattr__(self, "depth", depth)
+        object.__setattr__(self, "points", points)
+        object.__setattr__(self, "depths", depths)
+
+    def flipped(self) -> "Contact":
+        """The same contact seen from B: normal negated, depth and points unchanged."""
+        return Contact(0.0 - self.normal, self.depth, self.points, self.depths, self.feature_ids)
+
+    def __repr__(self):
+        return (f"Contact(normal={np.round(self.normal, 12).tolist()}, depth={self.depth!r}, "
+                f"points={self.points.tolist()})")

@@ -1,0 +1,12 @@
+# Generated from solutions/narrowphase/__init__.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+"""Narrow phase: boolean SAT tests and contact generation for pairs of world shapes.
+
+One concept per module: :mod:`.projection` (projecting onto a candidate axis),
+:mod:`.aabb_aabb`, :mod:`.polygon_polygon` (SAT, OBB-OBB and clipping into a 2-point
+manifold), :mod:`.circle_polygon` (box normals plus Arvo's nearest-vertex axis),
+:mod:`.circle_circle`, :mod:`.dispatch` (any pair, either order) and
+:mod:`.batch_sat` (numpy OBB-OBB test for many pairs at once).
+
+Conventions (see :mod:`solutions`): a contact's normal points from shape A to shape B,
+``depth >= 0`` and touching shapes (depth 0) count as colliding.
+"""

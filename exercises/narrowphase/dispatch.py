@@ -1,0 +1,79 @@
+# Generated from solutions/narrowphase/dispatch.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+"""One entry point for any pair of world shapes, in either order.
+
+``shapes_overlap(a, b)`` answers yes/no with the cheapest SAT test for the pair;
+``collide(a, b)`` returns the :class:`~solutions.contact.Contact` (normal from A to B)
+or None.  Both accept Circle, AABB, OBB and ConvexPolygon.  A polygon-circle pair is
+handled by the circle-polygon routine and the contact flipped, so the normal still
+points from ``a`` to ``b``.
+
+Invalid shapes never reach this module: the shape constructors raise ``ValueError``
+for NaN or infinite coordinates, negative sizes and clockwise or non-convex polygons.
+Anything that is not a shape raises ``TypeError``.
+"""
+from __future__ import annotations
+
+from ..contact import Contact
+from ..shapes import AABB, OBB, Circle, ConvexPolygon, Shape
+from .aabb_aabb import aabbs_overlap, collide_aabb_aabb
+from .circle_circle import circles_overlap, collide_circle_circle
+from .circle_polygon import circle_polygon_overlap, collide_circle_polygon, collide_polygon_circle
+from .polygon_polygon import collide_polygon_polygon, obbs_overlap, polygons_overlap
+
+SHAPE_TYPES = (Circle, AABB, OBB, ConvexPolygon)
+
+
+def _check(shape) -> None:
+    if not isinstance(shape, SHAPE_TYPES):
+        raise TypeError(f"expected a Circle, AABB, OBB or ConvexPolygon, got {type(shape).__name__}")
+
+
+def shapes_overlap(a: Shape, b: Shape) -> bool:
+    """Whether two world shapes overlap or touch.
+
+    Examples
+    --------
+    >>> shapes_overlap(AABB((8.0, -2.0), (12.0, 2.0)), Circle((-10.0, 0.0), 1.0))
+    False
+    >>> shapes_overlap(OBB((0.0, 0.0), (1.0, 1.0), 0.5), Circle((1.5, 0.0), 0.6))
+    True
+    """
+    _check(a)
+    _check(b)
+    a_round, b_round = isinstance(a, Circle), isinstance(b, Circle)
+    if a_round and b_round:
+        return circles_overlap(a, b)
+    if a_round:
+        return circle_polygon_overlap(a, b)
+    if b_round:
+        return circle_polygon_overlap(b, a)
+    if isinstance(a, AABB) and isinstance(b, AABB):
+        return aabbs_overlap(a, b)
+    if isinstance(a, (AABB, OBB)) and isinstance(b, (AABB, OBB)):
+        return obbs_overlap(a, b)
+    return polygons_overlap(a, b)
+
+
+def collide(a: Shape, b: Shape) -> Contact | None:
+    """Contact between two world shapes (normal from ``a`` to ``b``), or None if apart.
+
+    Examples
+    --------
+    >>> contact = collide(Circle((0.0, 1.5), 1.0), AABB((-2.0, -1.0), (2.0, 1.0)))
+    >>> contact.normal.tolist(), contact.depth
+    ([0.0, -1.0], 0.5)
+    >>> (collide(AABB((-2.0, -1.0), (2.0, 1.0)), Circle((0.0, 1.5), 1.0)).normal + 0.0).tolist()
+    [0.0, 1.0]
+    """
+    _check(a)
+    _check(b)
+    a_round, b_round = isinstance(a, Circle), isinstance(b, Circle)
+    if a_round and b_round:
+        return collide_circle_circle(a, b)
+    if a_round:
+        return collide_circle_polygon(a, b)
+    if b_round:
+        return collide_polygon_circle(a, b)
+    if isinstance(a, AABB) and isinstance(b, AABB):
+        return collide_aabb_aabb(a, b)
+    return collide_polygon_polygon(a, b)

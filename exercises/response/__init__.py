@@ -1,0 +1,14 @@
+# Generated from solutions/response/__init__.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+"""Collision response: what to do once two bodies are known to touch.
+
+- :mod:`.momentum_1d`: head-on collisions of two point masses (momentum, energy,
+  coefficient of restitution e).
+- :mod:`.impulse`: one impulse at one contact point between two rigid bodies, with
+  its linear and angular parts, and a single-shot response with Coulomb friction.
+- :mod:`.positional_correction`: linear projection that removes overlap.
+- :mod:`.contact_solver`: sequential impulses over many contacts (the iterative
+  solver real engines use), with switches to turn each technique on and off.
+
+Conventions as in :mod:`solutions`: SI units; a contact's normal points from body A to
+body B; an impulse ``P`` (N s) is applied as ``+P`` to B and ``-P`` to A.
+"""

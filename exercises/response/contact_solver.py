@@ -1,0 +1,1135 @@
+# Generated from solutions/response/contact_solver.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+"""Sequential impulses: the iterative contact solver of box2d-lite, Box2D and Chipmunk.
+
+One impulse per contact point is not enough when contacts share bodies (a stack, a
+pyramid): fixing one contact disturbs its neighbours.  Sequential impulses (projected
+Gauss-Seidel) sweeps over all contact points again and again, each time applying the
+impulse that fixes one point given everything else.  The sweeps converge to the
+solution of the global problem (the LCP that a "global" solver sets up with the
+Jacobian); stopping after a fixed number of sweeps trades accuracy for a predictable
+cost.
+
+Every technique has a switch in :class:`SolverSettings`, so a learner can turn one off
+and watch what changes: accumulated impulses, warm starting, friction, rotation, and
+four ways to fix penetration.
+
+Calling contract (how ``World.step`` uses the solver)
+-----------------------------------------------------
+``manifolds`` is a list of ``(i, j, contact)`` in which ``contact.normal`` points from
+``bodies[i]`` to ``bodies[j]``.  One solver object lives as long as the world (it
+remembers last step's impulses for warm starting); body indices must keep their
+meaning from one step to the next (call :meth:`ContactSolver.reset` after removing
+bodies)::
+
+    def step(self, dt):
+        manifolds = self.find_contacts()        # [(i, j, Contact), ...] at the current poses
+        for body in self.dynamic_bodies:        # 1. forces -> velocities
+            body.velocity = body.velocity + dt * (self.gravity + body.force / body.mass)
+            body.angular_velocity += dt * body.torque * body.inverse_inertia
+        self.solver.solve(self.bodies, manifolds, dt)         # 2. impulses -> velocities
+        for body in self.dynamic_bodies:        # 3. velocities -> positions
+            body.position = body.position + dt * body.velocity
+            body.angle += dt * body.angular_velocity
+        self.solver.finish_step(self.bodies, manifolds, dt)   # 4. position correction
+        self.last_stats = self.solver.stats     # SolverStats of this step
+
+:meth:`ContactSolver.finish_step` dispatches on ``settings.position_correction``:
+
+- ``"none"``, ``"baumgarte"``: nothing (Baumgarte acts inside ``solve`` as a velocity bias);
+- ``"projection"``: :meth:`ContactSolver.correct_positions` ``(bodies, manifolds)``;
+- ``"split_impulse"``: :meth:`ContactSolver.apply_pseudo_velocities` ``(bodies, dt)``.
+
+A world may call those two directly instead; either must follow ``solve`` of the same
+step, after position integration, with the same ``bodies`` and ``manifolds``.
+
+What ``solve`` does, in order
+-----------------------------
+1. Gather the bodies in contact: one row ``(vx, vy, w)`` per body (static bodies have
+   1/m = 1/I = 0; with ``rotation=False`` every 1/I and every w is taken as 0).
+2. Prestep, per contact point (vectorised over all points): lever arms ``r_A``, ``r_B`` from the centres of mass;
+   effective masses along ``n`` and along the tangent ``t = (n_y, -n_x)``; the
+   restitution target ``-e v_n`` from the velocity before any impulse, used only when
+   the closing speed exceeds ``restitution_threshold`` (so resting contacts do not
+   bounce); for ``"baumgarte"`` the bias ``beta / dt * max(depth - slop, 0)``.  The
+   target separating speed is the larger of the two.
+3. Warm start: apply the accumulated impulses remembered from the last step, matched by
+   ``(body pair, feature id)`` (or, when ``Contact.feature_ids`` is None, by the nearest
+   old point within ``warm_start_match_distance``), scaled by ``dt / previous dt``.
+4. ``iterations`` sweeps; per point the normal impulse, then the friction impulse.
+   With ``accumulate_impulses`` the running total is clamped (normal >= 0, friction
+   within ``+-mu`` times the normal total), so a sweep can take back what an earlier
+   one overdid; without it each increment is clamped and impulses can only grow.
+   The points are visited colour by colour (:func:`sweep_order`: the points of one
+   colour share no movable body).  :func:`sweep_loop` visits them one at a time with
+   plain Python floats and is the readable reference; :func:`sweep_batched` solves a
+   whole colour at once with numpy, which gives the same result up to rounding and is
+   faster when colours hold many points (``settings.sweep`` chooses).
+5. ``"split_impulse"`` only: the same sweeps on separate pseudo-velocities that push
+   overlapping bodies apart at ``beta / dt * max(depth - slop, 0)``; they move the
+   positions in :meth:`~ContactSolver.apply_pseudo_velocities` and are then dropped,
+   so they add no kinetic energy.
+6. Write the velocities back, remember the impulses, fill :attr:`ContactSolver.stats`.
+
+Pair coefficients are products, as in pymunk: e = e_A e_B, mu = mu_A mu_B.  SI units.
+
+Run ``python -m solutions.response.contact_solver`` for the time per step of the
+contacts of a pyramid of boxes.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..body import Body
+from ..contact import Contact
+
+POSITION_CORRECTIONS = ("none", "baumgarte", "projection", "split_impulse")
+SWEEPS = ("auto", "loop", "batched")
+ORDERS = ("manifolds", "colours")
+
+
+@dataclass
+class SolverSettings:
+    """Switches and constants of :class:`ContactSolver`.
+
+    Attributes
+    ----------
+    iterations : int
+        Velocity sweeps per step (also the number of pseudo-velocity sweeps).
+    accumulate_impulses : bool
+        Clamp the accumulated impulse (normal >= 0), not each increment.
+    warm_starting : bool
+        Start from last step's impulses.  Needs ``accumulate_impulses`` (without it
+        there is no total to remember); ignored otherwise.
+    position_correction : str
+        ``"none"``, ``"baumgarte"`` (velocity bias), ``"projection"`` (linear projection
+        after integration) or ``"split_impulse"`` (separate pseudo-velocities).
+    baumgarte : float
+        beta in [0, 1] (dimensionless): fraction of the overlap beyond ``slop``
+        removed per step by ``"baumgarte"`` and by ``"split_impulse"``.
+    correction_percent : float
+        Fraction in [0, 1] of the overlap beyond ``slop`` removed by ``"projection"``.
+    slop : float
+        Overlap allowed to remain (m).
+    restitution_threshold : float
+        Closing speed (m/s) below which e is treated as 0.
+    friction : bool
+        Apply Coulomb friction.
+    rotation : bool
+        False skips every angular term (enough for circles without friction).
+    warm_start_match_distance : float
+        Largest distance (m) between an old and a new contact point matched for warm
+        starting when the contact has no feature ids.
+    sweep : str
+        ``"loop"``: :func:`sweep_loop`, plain Python floats, one manifold at a time (the
+        reference); ``"batched"``: :func:`sweep_batched`, numpy, one batch of
+        :func:`sweep_order` at a time; ``"auto"``: batched when the batches hold many
+        manifolds on average.  Same results up to rounding.
+    block_solver : bool
+        Solve the two normal impulses of a two-point manifold together, as one 2x2
+        linear complementarity problem (Box2D's block solver,
+        :func:`block_normal_impulses`), instead of one point after the other.  A face
+        resting on a face then gets both impulses right in one go, without the
+        spurious turn a point-by-point solve leaves behind.  Manifolds whose 2x2
+        matrix is ill-conditioned (:data:`MAX_CONDITION_NUMBER`) are solved point by
+        point anyway.
+    """
+
+    iterations: int = 10
+    accumulate_impulses: bool = True
+    warm_starting: bool = True
+    position_correction: str = "baumgarte"
+    baumgarte: float = 0.2
+    correction_percent: float = 0.8
+    slop: float = 0.005
+    restitution_threshold: float = 1.0
+    friction: bool = True
+    rotation: bool = True
+    warm_start_match_distance: float = 0.05
+    sweep: str = "auto"
+    block_solver: bool = True
+    order: str = "manifolds"
+
+    def __post_init__(self):
+        if self.position_correction not in POSITION_CORRECTIONS:
+            raise ValueError(f"position_correction must be one of {POSITION_CORRECTIONS}, "
+                             f"got {self.position_correction!r}")
+        if self.sweep not in SWEEPS:
+            raise ValueError(f"sweep must be one of {SWEEPS}, got {self.sweep!r}")
+        if self.order not in ORDERS:
+            raise ValueError(f"order must be one of {ORDERS}, got {self.order!r}")
+        if int(self.iterations) != self.iterations or self.iterations < 0:
+            raise ValueError(f"iterations must be an integer >= 0, got {self.iterations}")
+        for name in ("baumgarte", "correction_percent"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise ValueError(f"{name} must be in [0, 1], got {getattr(self, name)}")
+        for name in ("slop", "restitution_threshold", "warm_start_match_distance"):
+            if not getattr(self, name) >= 0.0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
+
+
+@dataclass
+class SolverStats:
+    """What one call of :meth:`ContactSolver.solve` saw and did.
+
+    Attributes
+    ----------
+    manifolds, contact_points : int
+        Manifolds and contact points solved.
+    total_normal_impulse : float
+        Sum over the points of the normal impulse of this step, warm start included
+        (N s); divided by ``dt`` it is the total contact force (N).
+    total_pseudo_impulse : float
+        The same for the split-impulse pseudo-velocities (N s); 0 in other modes.
+    max_penetration : float
+        Largest contact depth in the manifolds (m).
+    warm_started_points : int
+        Points that found an impulse from the previous step.
+    block_manifolds : int
+        Two-point manifolds solved by the block solver.
+    """
+
+    manifolds: int = 0
+    contact_points: int = 0
+    total_normal_impulse: float = 0.0
+    total_pseudo_impulse: float = 0.0
+    max_penetration: float = 0.0
+    warm_started_points: int = 0
+    block_manifolds: int = 0
+
+
+class ContactSolver:
+    """Sequential-impulse contact solver; the module docstring gives the contract.
+
+    Parameters
+    ----------
+    settings : SolverSettings, optional
+        Switches and constants; the defaults follow box2d-lite.
+
+    Attributes
+    ----------
+    settings : SolverSettings
+    stats : SolverStats
+        Figures of the last :meth:`solve`.
+    contact_impulses : list of tuple
+        One ``(i, j, point, normal_impulse, tangent_impulse)`` per contact point of the
+        last :meth:`solve`; impulses in N s, given to body j and the opposite to body
+        i, the tangent one along ``(n_y, -n_x)``.
+
+    Examples
+    --------
+    A 1 kg box falling at 1 m/s onto static ground is stopped in one step:
+
+    >>> ground = Body.box(10.0, 1.0, position=(0.0, -0.5), is_static=True)
+    >>> box = Body.box(1.0, 1.0, position=(0.0, 0.5), velocity=(0.0, -1.0))
+    >>> contact = Contact((0.0, 1.0), 0.0, [(-0.5, 0.0), (0.5, 0.0)], feature_ids=("left", "right"))
+    >>> solver = ContactSolver(SolverSettings(position_correction="none"))
+    >>> solver.solve([ground, box], [(0, 1, contact)], dt=1 / 60)
+    >>> bool(np.abs(box.velocity).max() < 1e-12), round(solver.stats.total_normal_impulse, 12)
+    (True, 1.0)
+    """
+
+    def __init__(self, settings: SolverSettings | None = None):
+        self.settings = SolverSettings() if settings is None else settings
+        self.stats = SolverStats()
+        self.contact_impulses: list[tuple] = []
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget last step's impulses and pending corrections (for example after
+        bodies were removed and indices changed meaning).
+
+        >>> ContactSolver().reset()
+        """
+        self._impulses_by_pair: dict[tuple[int, int], list[tuple]] = {}
+        self._previous_dt: float | None = None
+        self._pseudo_velocities: dict[int, tuple[float, float, float]] = {}
+        self._poses_at_solve: dict[int, tuple[float, float, float]] = {}
+
+    def solve(self, bodies: list[Body], manifolds: list[tuple[int, int, Contact]], dt: float) -> None:
+        """Apply the contact impulses of one step of ``dt`` to the bodies' velocities.
+
+        Call after forces have been integrated into velocities and before positions
+        are integrated.  Changes ``velocity`` (the array is replaced) and
+        ``angular_velocity`` of the dynamic bodies in contact, and fills :attr:`stats`.
+
+        Parameters
+        ----------
+        bodies : list of Body
+        manifolds : list of (int, int, Contact)
+            ``(i, j, contact)`` with ``contact.normal`` from ``bodies[i]`` to ``bodies[j]``.
+        dt : float
+            Time step (s), > 0.
+
+        Examples
+        --------
+        Two 1 kg discs meeting head on at 2 m/s each with e = 1 swap velocities:
+
+        >>> a = Body.circle(0.5, position=(-0.5, 0.0), velocity=(2.0, 0.0), restitution=1.0)
+        >>> b = Body.circle(0.5, position=(0.5, 0.0), velocity=(-2.0, 0.0), restitution=1.0)
+        >>> touching = Contact((1.0, 0.0), 0.0, [(0.0, 0.0)])
+        >>> ContactSolver().solve([a, b], [(0, 1, touching)], dt=1 / 60)
+        >>> a.velocity.tolist(), b.velocity.tolist()
+        ([-2.0, 0.0], [2.0, 0.0])
+        """
+        settings = self.settings
+        if not dt > 0.0:
+            raise ValueError(f"dt must be > 0 s, got {dt}")
+        accumulate = settings.accumulate_impulses
+        warm_start = settings.warm_starting and accumulate
+        dt_ratio = 1.0 if self._previous_dt is None else dt / self._previous_dt
+        self._pseudo_velocities = {}
+
+        # 1. The bodies in contact, numbered 0..n-1 here; velocity rows are (vx, vy, w).
+        local: dict[int, int] = {}
+        for i, j, _ in manifolds:
+            if i == j:
+                raise ValueError(f"a body cannot touch itself: manifold ({i}, {j})")
+            local.setdefault(i, len(local))
+            local.setdefault(j, len(local))
+        members = [bodies[index] for index in local]
+        velocity = np.array([(*body.velocity.tolist(), float(body.angular_velocity)) for body in members],
+                            dtype=float).reshape(-1, 3)
+        centre = np.array([body.position.tolist() for body in members], dtype=float).reshape(-1, 2)
+        inverse_mass = np.array([body.inverse_mass for body in members], dtype=float)
+        inverse_inertia = np.array([body.inverse_inertia for body in members], dtype=float)
+        if not settings.rotation:
+            velocity[:, 2] = 0.0
+            inverse_inertia[:] = 0.0
+
+        # 2. Prestep, all contact points at once.
+        counts = [len(contact.points) for _, _, contact in manifolds]
+        point_count = sum(counts)
+        a = np.repeat(np.array([local[i] for i, _, _ in manifolds], dtype=int), counts)
+        b = np.repeat(np.array([local[j] for _, j, _ in manifolds], dtype=int), counts)
+        normal = np.repeat(np.array([c.normal for _, _, c in manifolds]).reshape(-1, 2), counts, axis=0)
+        point = np.concatenate([c.points for _, _, c in manifolds]) if manifolds else np.zeros((0, 2))
+        depth = np.concatenate([c.depths for _, _, c in manifolds]) if manifolds else np.zeros(0)
+        restitution = np.repeat([bodies[i].restitution * bodies[j].restitution for i, j, _ in manifolds], counts)
+        friction = np.repeat([bodies[i].friction * bodies[j].friction for i, j, _ in manifolds], counts)
+        if not settings.friction:
+            friction[:] = 0.0
+        nx, ny = normal[:, 0], normal[:, 1]
+        r_a, r_b = point - centre[a], point - centre[b]
+        rn_a = r_a[:, 0] * ny - r_a[:, 1] * nx       # r x n
+        rn_b = r_b[:, 0] * ny - r_b[:, 1] * nx
+        rt_a = -(r_a[:, 0] * nx + r_a[:, 1] * ny)    # r x t with t = (ny, -nx)
+        rt_b = -(r_b[:, 0] * nx + r_b[:, 1] * ny)
+        ima, imb = inverse_mass[a], inverse_mass[b]
+        iia, iib = inverse_inertia[a], inverse_inertia[b]
+        k_normal = ima + imb + iia * rn_a**2 + iib * rn_b**2
+        k_tangent = ima + imb + iia * rt_a**2 + iib * rt_b**2
+        # A point between two static bodies gets mass 0: no impulse can move them.
+        mass_normal = np.divide(1.0, k_normal, out=np.zeros(point_count), where=k_normal > 0.0)
+        mass_tangent = np.divide(1.0, k_tangent, out=np.zeros(point_count), where=k_tangent > 0.0)
+        va, vb = velocity[a], velocity[b]
+        normal_velocity = ((vb[:, 0] - va[:, 0]) * nx + (vb[:, 1] - va[:, 1]) * ny
+                           + vb[:, 2] * rn_b - va[:, 2] * rn_a)
+        target = np.where(normal_velocity < -settings.restitution_threshold, -restitution * normal_velocity, 0.0)
+        position_bias = settings.baumgarte / dt * np.maximum(depth - settings.slop, 0.0)
+        if settings.position_correction == "baumgarte":
+            target = np.maximum(target, position_bias)
+
+        # 3. Warm start from last step's accumulated impulses.
+        point_keys = self._point_keys(manifolds)
+        normal_total = np.zeros(point_count)
+        tangent_total = np.zeros(point_count)
+        if warm_start:
+            self._recall_impulses(manifolds, point_keys, normal_total, tangent_total)
+            normal_total *= dt_ratio
+            tangent_total *= dt_ratio if settings.friction else 0.0
+            impulse = normal_total[:, None] * normal + tangent_total[:, None] * np.stack([ny, -nx], axis=1)
+            np.add.at(velocity, a, -np.column_stack([ima[:, None] * impulse,
+                                                     iia * (r_a[:, 0] * impulse[:, 1] - r_a[:, 1] * impulse[:, 0])]))
+            np.add.at(velocity, b, np.column_stack([imb[:, None] * impulse,
+                                                    iib * (r_b[:, 0] * impulse[:, 1] - r_b[:, 1] * impulse[:, 0])]))
+        warm_started = int(np.count_nonzero(normal_total)) if warm_start else 0
+
+        # 4. Velocity sweeps, manifold by manifold, colour by colour (see sweep_order).
+        rows, order = self._sweep_rows(manifolds, local, counts, inverse_mass + inverse_inertia > 0.0,
+                                       dict(a=a, b=b, nx=nx, ny=ny, rn_a=rn_a, rn_b=rn_b, rt_a=rt_a, rt_b=rt_b,
+                                            ima=ima, imb=imb, iia=iia, iib=iib, mass_normal=mass_normal,
+                                            mass_tangent=mass_tangent, target=target, friction=friction))
+        batches = len(rows.bounds) - 1
+        batched = (settings.sweep == "batched"
+                   or (settings.sweep == "auto" and len(manifolds) >= BATCH_MIN_MANIFOLDS_PER_BATCH * batches))
+        sweep = sweep_batched if batched else sweep_loop
+        sweep_normal, sweep_tangent = normal_total[order], tangent_total[order]
+        velocity = sweep(velocity, rows, settings.iterations, accumulate, sweep_normal, sweep_tangent)
+        normal_total[order], tangent_total[order] = sweep_normal, sweep_tangent
+
+        # 5. Split impulse: the same sweeps on pseudo-velocities, no friction, no warm start.
+        pseudo_total = 0.0
+        if settings.position_correction == "split_impulse" and point_count:
+            pseudo_impulse = np.zeros(point_count)
+            pseudo_rows = replace(rows, target=position_bias[order], friction=np.zeros(point_count))
+            pseudo_velocity = sweep(np.zeros_like(velocity), pseudo_rows, settings.iterations, accumulate,
+                                    pseudo_impulse, np.zeros(point_count))
+            pseudo_total = float(pseudo_impulse.sum())
+            self._pseudo_velocities = {index: tuple(pseudo_velocity[k].tolist())
+                                       for index, k in local.items() if not members[k].is_static}
+
+        # 6. Write back, remember the impulses for warm starting, report.
+        for k, body in enumerate(members):
+            if body.is_static:
+                continue
+            body.velocity = velocity[k, :2].copy()
+            if inverse_inertia[k] > 0.0:
+                body.angular_velocity = float(velocity[k, 2])
+        self._remember_impulses(point_keys, point, normal_total, tangent_total)
+        global_index = list(local)
+        self.contact_impulses = [(global_index[ka], global_index[kb], (px, py), pn, pt)
+                                 for ka, kb, (px, py), pn, pt in zip(a.tolist(), b.tolist(), point.tolist(),
+                                                                     normal_total.tolist(), tangent_total.tolist())]
+        self._poses_at_solve = {index: (*centre[k].tolist(), float(members[k].angle)) for index, k in local.items()}
+        self._previous_dt = dt
+        self.stats = SolverStats(manifolds=len(manifolds), contact_points=point_count,
+                                 total_normal_impulse=float(normal_total.sum()),
+                                 total_pseudo_impulse=pseudo_total,
+                                 max_penetration=float(depth.max(initial=0.0)),
+                                 warm_started_points=warm_started,
+                                 block_manifolds=int(rows.block.sum()))
+
+    def _sweep_rows(self, manifolds, local, counts, movable, columns) -> tuple[SweepRows, np.ndarray]:
+        """The points in sweep order, their manifolds, colours and 2x2 matrices ``K``.
+
+        ``columns`` holds the per-point arrays of the prestep (names of
+        :attr:`SweepRows.POINT_FIELDS`) in manifold order.  Returns the rows and
+        ``order``: sweep position -> index in manifold order.
+        """
+        counts = np.array(counts, dtype=int)
+        starts = np.cumsum(counts) - counts                      # first point of each manifold
+        manifold_a = np.array([local[i] for i, _, _ in manifolds], dtype=int)
+        manifold_b = np.array([local[j] for _, j, _ in manifolds], dtype=int)
+        manifold_order, bounds = sweep_order(manifold_a, manifold_b, movable, self.settings.order)
+        count = counts[manifold_order]
+        first = np.cumsum(count) - count                         # in sweep order
+        order = (np.repeat(starts[manifold_order] - first, count) + np.arange(count.sum())).astype(int)
+        point = {name: columns[name][order] for name in SweepRows.POINT_FIELDS}
+        # K = J M^-1 J^T of the two normal rows of each two-point manifold (same bodies A, B).
+        k11, k12, k22 = np.zeros((3, len(manifolds)))
+        two = count == 2
+        p1 = first[two]
+        p2 = p1 + 1
+        ima, imb, iia, iib = (point[name][p1] for name in ("ima", "imb", "iia", "iib"))
+        rn_a1, rn_b1, rn_a2, rn_b2 = point["rn_a"][p1], point["rn_b"][p1], point["rn_a"][p2], point["rn_b"][p2]
+        k11[two] = ima + imb + iia * rn_a1 * rn_a1 + iib * rn_b1 * rn_b1
+        k22[two] = ima + imb + iia * rn_a2 * rn_a2 + iib * rn_b2 * rn_b2
+        k12[two] = ima + imb + iia * rn_a1 * rn_a2 + iib * rn_b1 * rn_b2
+        # cond(K) < MAX_CONDITION_NUMBER, tested as Box2D does (k11^2 < c det K) but with
+        # the larger diagonal entry, so that the test does not depend on the point order.
+        block = two & self.settings.block_solver & (np.maximum(k11, k22) ** 2
+                                                    < MAX_CONDITION_NUMBER * (k11 * k22 - k12 * k12))
+        rows = SweepRows(**point, first=first, count=count, block=block, k11=np.where(block, k11, 0.0),
+                         k12=np.where(block, k12, 0.0), k22=np.where(block, k22, 0.0), bounds=bounds)
+        return rows, order
+
+    # Warm-starting memory: per body pair (low, high index), the points of the last
+    # step with their feature ids, positions and impulses.
+    @staticmethod
+    def _point_keys(manifolds) -> list[tuple]:
+        """``(pair, feature id or None)`` of every contact point, pair = (low, high) index."""
+        keys = []
+        for i, j, contact in manifolds:
+            pair = (i, j) if i < j else (j, i)
+            features = contact.feature_ids if contact.feature_ids is not None else (None,) * len(contact.points)
+            keys.extend((pair, feature) for feature in features)
+        return keys
+
+    def _recall_impulses(self, manifolds, point_keys, normal_total, tangent_total) -> None:
+        """Fill in the impulses remembered for each point (0 where nothing matches).
+
+        A point takes the old point of the same pair with the same feature id; failing
+        that (no id, or an id that is new: the narrow phase swapped reference faces or
+        clipped a different vertex) the nearest old point not yet taken, if it is within
+        ``warm_start_match_distance``.
+        """
+        import os
+        fallback = not os.environ.get("NOFALLBACK")
+        first = 0
+        for _, _, contact in manifolds:
+            count = len(contact.points)
+            unmatched = list(self._impulses_by_pair.get(point_keys[first][0], ())) if count else []
+            pending = []
+            for k in range(first, first + count):
+                feature = point_keys[k][1]
+                same = [n for n, old in enumerate(unmatched) if feature is not None and old[0] == feature]
+                if same:
+                    normal_total[k], tangent_total[k] = unmatched.pop(same[0])[3:]
+                elif feature is None or fallback:
+                    pending.append(k)
+            for k in pending:
+                if not unmatched:
+                    break
+                px, py = contact.points[k - first].tolist()
+                distances = [math.hypot(ox - px, oy - py) for _, ox, oy, _, _ in unmatched]
+                nearest = int(np.argmin(distances))
+                if distances[nearest] <= self.settings.warm_start_match_distance:
+                    normal_total[k], tangent_total[k] = unmatched.pop(nearest)[3:]
+            first += count
+
+    def _remember_impulses(self, point_keys, point, normal_total, tangent_total) -> None:
+        self._impulses_by_pair = {}
+        for (pair, feature), (px, py), pn, pt in zip(point_keys, point.tolist(),
+                                                     normal_total.tolist(), tangent_total.tolist()):
+            self._impulses_by_pair.setdefault(pair, []).append((feature, px, py, pn, pt))
+
+    def correct_positions(self, bodies: list[Body], manifolds: list[tuple[int, int, Contact]]) -> None:
+        """Linear projection (``position_correction="projection"``), after integration.
+
+        For each manifold, in order, estimate the overlap now: each point's depth from
+        :meth:`solve` minus how far the two material points that touched there have
+        moved apart along ``n`` since then (rotation included).  Then move the two
+        bodies apart along ``n`` by ``correction_percent * max(depth_now - slop, 0)``,
+        split by inverse mass (static bodies stay; angles are not changed).  Later
+        manifolds see the corrections of earlier ones.
+
+        Parameters
+        ----------
+        bodies : list of Body
+            ``position`` arrays of dynamic bodies are replaced.
+        manifolds : list of (int, int, Contact)
+            The manifolds given to :meth:`solve` in this step.
+
+        Examples
+        --------
+        A box resting 0.1 m deep in static ground is lifted by 80 % of 0.1 - 0.005 m:
+
+        >>> ground = Body.box(10.0, 1.0, position=(0.0, -0.5), is_static=True)
+        >>> box = Body.box(1.0, 1.0, position=(0.0, 0.4))
+        >>> sunk = Contact((0.0, 1.0), 0.1, [(-0.5, -0.05), (0.5, -0.05)], feature_ids=(0, 1))
+        >>> solver = ContactSolver(SolverSettings(position_correction="projection"))
+        >>> solver.solve([ground, box], [(0, 1, sunk)], dt=1 / 60)
+        >>> solver.correct_positions([ground, box], [(0, 1, sunk)])
+        >>> round(float(box.position[1]), 12)
+        0.476
+        """
+        settings = self.settings
+        position = {}
+        turn = {}
+        for i, j, _ in manifolds:
+            for index in (i, j):
+                if index in position:
+                    continue
+                if index not in self._poses_at_solve:
+                    raise RuntimeError("correct_positions needs solve() of the same step first")
+                position[index] = bodies[index].position.tolist()
+                rotated_by = float(bodies[index].angle) - self._poses_at_solve[index][2]
+                turn[index] = (math.cos(rotated_by), math.sin(rotated_by))
+
+        def material_point_now(index, px, py):
+            """Where the point of body ``index`` that was at (px, py) in solve() is now."""
+            x0, y0, _ = self._poses_at_solve[index]
+            c, s = turn[index]
+            rx, ry = px - x0, py - y0
+            x, y = position[index]
+            return x + c * rx - s * ry, y + s * rx + c * ry
+
+        for i, j, contact in manifolds:
+            ima, imb = float(bodies[i].inverse_mass), float(bodies[j].inverse_mass)
+            if ima + imb == 0.0:
+                continue
+            nx, ny = contact.normal.tolist()
+            deepest = 0.0
+            for (px, py), depth in zip(contact.points.tolist(), contact.depths.tolist()):
+                ax, ay = material_point_now(i, px, py)
+                bx, by = material_point_now(j, px, py)
+                deepest = max(deepest, depth - ((bx - ax) * nx + (by - ay) * ny))
+            correction = settings.correction_percent * max(deepest - settings.slop, 0.0) / (ima + imb)  # kg m
+            if correction == 0.0:
+                continue
+            position[i][0] -= ima * correction * nx
+            position[i][1] -= ima * correction * ny
+            position[j][0] += imb * correction * nx
+            position[j][1] += imb * correction * ny
+        for index, (x, y) in position.items():
+            if not bodies[index].is_static:
+                bodies[index].position = np.array((x, y))
+
+    def apply_pseudo_velocities(self, bodies: list[Body], dt: float) -> None:
+        """Move bodies by the split-impulse pseudo-velocities of the last :meth:`solve`.
+
+        ``x += dt * v_pseudo``, ``angle += dt * w_pseudo``; call after position
+        integration.  The pseudo-velocities are then forgotten: they never enter
+        ``velocity``, so pushing bodies apart adds no kinetic energy.
+
+        Parameters
+        ----------
+        bodies : list of Body
+            ``position`` arrays of the moved bodies are replaced.
+        dt : float
+            The step's time step (s).
+
+        Examples
+        --------
+        A box resting 0.105 m deep is lifted by beta = 0.2 of 0.1 m:
+
+        >>> ground = Body.box(10.0, 1.0, position=(0.0, -0.5), is_static=True)
+        >>> box = Body.box(1.0, 1.0, position=(0.0, 0.395))
+        >>> sunk = Contact((0.0, 1.0), 0.105, [(-0.5, -0.05), (0.5, -0.05)], feature_ids=(0, 1))
+        >>> solver = ContactSolver(SolverSettings(position_correction="split_impulse", iterations=30))
+        >>> solver.solve([ground, box], [(0, 1, sunk)], dt=0.01)
+        >>> box.velocity.tolist()
+        [0.0, 0.0]
+        >>> solver.apply_pseudo_velocities([ground, box], dt=0.01)
+        >>> round(float(box.position[1]), 9)
+        0.415
+        """
+        for index, (pvx, pvy, pw) in self._pseudo_velocities.items():
+            body = bodies[index]
+            body.position = body.position + dt * np.array((pvx, pvy))
+            if body.inverse_inertia > 0.0:
+                body.angle += dt * pw
+        self._pseudo_velocities = {}
+
+    def finish_step(self, bodies: list[Body], manifolds: list[tuple[int, int, Contact]], dt: float) -> None:
+        """Position correction after position integration, as the settings ask.
+
+        ``"projection"``: :meth:`correct_positions`; ``"split_impulse"``:
+        :meth:`apply_pseudo_velocities`; ``"none"`` and ``"baumgarte"``: nothing.
+
+        >>> ContactSolver().finish_step([], [], dt=1 / 60)
+        """
+        mode = self.settings.position_correction
+        if mode == "projection":
+            self.correct_positions(bodies, manifolds)
+        elif mode == "split_impulse":
+            self.apply_pseudo_velocities(bodies, dt)
+
+
+#: ``sweep="auto"`` uses :func:`sweep_batched` when the batches of :func:`sweep_order`
+#: hold at least this many manifolds on average (measured break-even: the numpy
+#: operations of one batch cost about as much as this many manifolds of the loop).
+BATCH_MIN_MANIFOLDS_PER_BATCH = 24
+
+#: The block solver needs cond(K) below about this (dimensionless); above it the two
+#: normal rows of a manifold are nearly dependent (points close together, or no
+#: rotation), the 2x2 solve would amplify rounding, and the points are solved one
+#: after the other instead.  Box2D's ``k_maxConditionNumber``.
+MAX_CONDITION_NUMBER = 1000.0
+
+
+@dataclass
+class SweepRows:
+    """What the velocity sweeps need, in sweep order (colour by colour, manifold by manifold).
+
+    Symbols: ``n`` the normal (from A to B), ``t = (n_y, -n_x)`` the tangent,
+    ``rn = r x n`` and ``rt = r x t`` for the lever arms ``r`` from the centres of mass.
+
+    Attributes
+    ----------
+    a, b : numpy.ndarray of int, shape (m,)
+        Local body numbers (rows of ``velocity``) of each contact point.
+    nx, ny : numpy.ndarray, shape (m,)
+        Normal of each point.
+    rn_a, rn_b, rt_a, rt_b : numpy.ndarray, shape (m,)
+        ``r x n`` and ``r x t`` for bodies A and B (m).
+    ima, imb, iia, iib : numpy.ndarray, shape (m,)
+        Inverse masses (1/kg) and inverse inertias (1/(kg m^2)) of A and B.
+    mass_normal, mass_tangent : numpy.ndarray, shape (m,)
+        Effective masses ``1 / K`` along ``n`` and ``t`` (kg); 0 if nothing can move.
+    target : numpy.ndarray, shape (m,)
+        Separating normal velocity wanted at each point (m/s).
+    friction : numpy.ndarray, shape (m,)
+        Pair friction coefficient mu of each point.
+    first, count : numpy.ndarray of int, shape (k,)
+        Each manifold's first point and number of points (1 or 2); the points of
+        manifold ``c`` are ``first[c], first[c] + 1, ...``.
+    block : numpy.ndarray of bool, shape (k,)
+        Solve the two normal impulses of the manifold together (:func:`block_normal_impulses`).
+    k11, k12, k22 : numpy.ndarray, shape (k,)
+        ``K = J M^-1 J^T`` of the two normal rows (1/kg): the normal velocity change at
+        point i per unit normal impulse at point j.  Set where ``block``.
+    bounds : numpy.ndarray of int, shape (colours + 1,)
+        Colour ``c`` is manifolds ``bounds[c]:bounds[c + 1]`` (see :func:`sweep_order`).
+    """
+
+    a: np.ndarray
+    b: np.ndarray
+    nx: np.ndarray
+    ny: np.ndarray
+    rn_a: np.ndarray
+    rn_b: np.ndarray
+    rt_a: np.ndarray
+    rt_b: np.ndarray
+    ima: np.ndarray
+    imb: np.ndarray
+    iia: np.ndarray
+    iib: np.ndarray
+    mass_normal: np.ndarray
+    mass_tangent: np.ndarray
+    target: np.ndarray
+    friction: np.ndarray
+    first: np.ndarray
+    count: np.ndarray
+    block: np.ndarray
+    k11: np.ndarray
+    k12: np.ndarray
+    k22: np.ndarray
+    bounds: np.ndarray
+
+    POINT_FIELDS = ("a", "b", "nx", "ny", "rn_a", "rn_b", "rt_a", "rt_b", "ima", "imb", "iia", "iib",
+                    "mass_normal", "mass_tangent", "target", "friction")
+
+
+def block_normal_impulses(k11: float, k12: float, k22: float, b1: float, b2: float) -> tuple[float, float]:
+    """The 2x2 mixed LCP of a two-point manifold, by enumerating its four cases.
+
+    Find impulses ``x = (x1, x2) >= 0`` (N s) such that the normal velocities after
+    them, ``v = K x + b`` (m/s), are ``>= 0`` and ``x_i v_i = 0`` (a point pushes only
+    while it touches).  ``b`` is the velocity the points would have with no impulse at
+    all, minus their targets.  The cases, tried in Box2D's order
+    (``b2ContactSolver::SolveVelocityConstraints``):
+
+    1. both points push: ``x = -K^-1 b``, accepted if ``x >= 0``;
+    2. only point 1: ``x1 = -b1 / k11``, ``x2 = 0``, accepted if ``x1 >= 0`` and ``v2 >= 0``;
+    3. only point 2: the same with the roles swapped;
+    4. neither: ``x = 0``, accepted if ``b >= 0``.
+
+    A positive definite ``K`` always has exactly one case that fits; if rounding
+    leaves none, ``(nan, nan)`` is returned and the caller keeps its impulses.
+
+    Parameters
+    ----------
+    k11, k12, k22 : float
+        Entries of the symmetric 2x2 matrix ``K`` (1/kg), with ``k11 k22 > k12^2``.
+    b1, b2 : float
+        Velocities without impulse, minus the targets (m/s).
+
+    Returns
+    -------
+    (float, float)
+        ``(x1, x2)`` (N s).
+
+    Examples
+    --------
+    A 1 kg, 1 m box resting flat on static ground (points at x = -0.5 and +0.5,
+    inertia 1/6 kg m^2) after one step of gravity at 60 Hz shares its weight equally:
+
+    >>> k11 = k22 = 1.0 + 6.0 * 0.25; k12 = 1.0 - 6.0 * 0.25
+    >>> [round(x, 12) for x in block_normal_impulses(k11, k12, k22, -9.81 / 60, -9.81 / 60)]
+    [0.08175, 0.08175]
+    """
+    det = k11 * k22 - k12 * k12
+    x1 = (k12 * b2 - k22 * b1) / det             # case 1: -K^-1 b
+    x2 = (k12 * b1 - k11 * b2) / det
+    if x1 >= 0.0 and x2 >= 0.0:
+        return x1, x2
+    x1 = -b1 / k11                                # case 2: v1 = 0, x2 = 0
+    if x1 >= 0.0 and k12 * x1 + b2 >= 0.0:
+        return x1, 0.0
+    x2 = -b2 / k22                                # case 3: v2 = 0, x1 = 0
+    if x2 >= 0.0 and k12 * x2 + b1 >= 0.0:
+        return 0.0, x2
+    if b1 >= 0.0 and b2 >= 0.0:                   # case 4: both separate
+        return 0.0, 0.0
+    return math.nan, math.nan
+
+
+def sweep_order(body_a: np.ndarray, body_b: np.ndarray, movable: np.ndarray,
+                order: str = "manifolds") -> tuple[np.ndarray, np.ndarray]:
+    """Order in which the sweeps visit the manifolds, in batches that share no movable body.
+
+    The manifolds of one batch share no movable body, so they can be solved at the
+    same time (:func:`sweep_batched`) with the same result as one after the other
+    (:func:`sweep_loop`).  Static bodies may appear in many manifolds of one batch:
+    their velocity never changes.
+
+    - ``"manifolds"``: Gauss-Seidel in the given order, as Box2D and box2d-lite sweep
+      their contact lists.  Each manifold goes into the batch after the last one that
+      holds an earlier manifold sharing one of its movable bodies, so solving batch by
+      batch is solving in the given order.  A chain (a stack) is then one manifold
+      per batch, and one sweep carries an impulse from one end of it to the other.
+    - ``"colours"``: greedy colouring: each manifold, in the given order, takes the
+      smallest colour not yet used by a movable body it touches.  Fewer, larger
+      batches (faster with :func:`sweep_batched`), but a chain becomes red-black
+      (every other contact, then the rest) and an impulse travels only about one
+      contact per colour and sweep.
+
+    Parameters
+    ----------
+    body_a, body_b : numpy.ndarray of int, shape (m,)
+        Local body numbers of each manifold.
+    movable : numpy.ndarray of bool, shape (n,)
+        Whether each body can move (finite mass or inertia).
+    order : str
+        ``"manifolds"`` or ``"colours"``.
+
+    Returns
+    -------
+    order : numpy.ndarray of int, shape (m,)
+        Manifold indices, batch by batch (stable within a batch).
+    bounds : numpy.ndarray of int, shape (batches + 1,)
+        Batch ``c`` is ``order[bounds[c]:bounds[c + 1]]``.
+
+    Examples
+    --------
+    Manifolds 0-1, 1-2 and 0-2 between a static body 0 and movable bodies 1 and 2.
+    In the given order, manifold 1 must wait for manifold 0 (body 1) and manifold 2
+    for manifold 1 (body 2); by colours, manifolds 0 and 2 share only the static
+    body and go together, manifold 1 comes after them.
+
+    >>> pairs = np.array([0, 1, 0]), np.array([1, 2, 2]), np.array([False, True, True])
+    >>> [(o.tolist(), b.tolist()) for o, b in (sweep_order(*pairs), sweep_order(*pairs, order="colours"))]
+    [([0, 1, 2], [0, 1, 2, 3]), ([0, 2, 1], [0, 2, 3])]
+    """
+    if order not in ORDERS:
+        raise ValueError(f"order must be one of {ORDERS}, got {order!r}")
+    movable = movable.tolist()
+    batch = []
+    if order == "manifolds":
+        after = [0] * len(movable)  # the first batch a new manifold of each body may join
+        for i, j in zip(body_a.tolist(), body_b.tolist()):
+            c = max(after[i] if movable[i] else 0, after[j] if movable[j] else 0)
+            batch.append(c)
+            for k in (i, j):
+                if movable[k]:
+                    after[k] = c + 1
+    else:
+        used = [0] * len(movable)  # bit c set: the body already has a manifold of colour c
+        for i, j in zip(body_a.tolist(), body_b.tolist()):
+            taken = (used[i] if movable[i] else 0) | (used[j] if movable[j] else 0)
+            c = ((~taken) & (taken + 1)).bit_length() - 1  # lowest free colour
+            batch.append(c)
+            for k in (i, j):
+                if movable[k]:
+                    used[k] |= 1 << c
+    batch = np.array(batch, dtype=int)
+    indices = np.argsort(batch, kind="stable")
+    bounds = np.searchsorted(batch[indices], np.arange(batch.max(initial=-1) + 2))
+    return indices, bounds
+
+
+def sweep_loop(velocity: np.ndarray, rows: SweepRows, iterations: int, accumulate: bool,
+               normal_total: np.ndarray, tangent_total: np.ndarray) -> np.ndarray:
+    """Sequential-impulse sweeps, one manifold at a time (the reference version).
+
+    Per manifold, with ``accumulate`` (Box2D's order): the friction impulse of each
+    point, its running total clamped to ``+-mu`` times the normal total so far, then
+    the normal impulses (both together if ``rows.block``, else point by point), their
+    totals clamped to >= 0.  Without ``accumulate`` each increment is clamped, and
+    each point's friction follows its normal, bounded by ``mu`` times that normal
+    increment.
+
+    Parameters
+    ----------
+    velocity : numpy.ndarray, shape (n, 3)
+        Rows ``(vx, vy, w)`` of the bodies in contact (m/s, rad/s).
+    rows : SweepRows
+        The contact points and manifolds in sweep order.
+    iterations : int
+        Number of sweeps.
+    accumulate : bool
+        Clamp accumulated impulses (True) or increments (False).
+    normal_total, tangent_total : numpy.ndarray, shape (m,)
+        Accumulated impulses per point (N s), in sweep order; updated in place.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 3)
+        The new velocities.
+
+    Examples
+    --------
+    A static ground and a 1 kg disc of radius 0.5 m falling at 1 m/s, one point
+    straight below the centre (``r x t = 0.5``):
+
+    >>> rows = SweepRows(*[np.array([x]) for x in (0, 1, 0.0, 1.0, 0.0, 0.0, 0.0, 0.5, 0.0, 1.0, 0.0, 2.0,
+    ...                                            1.0, 1 / 1.5, 0.0, 0.0, 0, 1, False, 0.0, 0.0, 0.0)],
+    ...                  bounds=np.array([0, 1]))
+    >>> sweep_loop(np.array([[0.0, 0.0, 0.0], [0.0, -1.0, 0.0]]), rows, 1, True, np.zeros(1), np.zeros(1)).tolist()
+    [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
+    """
+    vx, vy, w = velocity.T.tolist()
+    points = list(zip(*(getattr(rows, name).tolist() for name in SweepRows.POINT_FIELDS)))
+    manifolds = list(zip(rows.first.tolist(), rows.count.tolist(), rows.block.tolist(),
+                         rows.k11.tolist(), rows.k12.tolist(), rows.k22.tolist()))
+    normal_list, tangent_list = normal_total.tolist(), tangent_total.tolist()
+    normal_change_list = [0.0] * len(points)  # this sweep's normal increment (bound without accumulation)
+
+    def push(a, b, ima, imb, iia, iib, impulse_x, impulse_y, torque_a, torque_b):
+        """Impulse (impulse_x, impulse_y) on B, its opposite on A; torque_* = r x impulse."""
+        vx[a] -= ima * impulse_x
+        vy[a] -= ima * impulse_y
+        w[a] -= iia * torque_a
+        vx[b] += imb * impulse_x
+        vy[b] += imb * impulse_y
+        w[b] += iib * torque_b
+
+    def normal_velocity(k):
+        a, b, nx, ny, rn_a, rn_b = points[k][:6]
+        # v_n = (v_B + w_B x r_B - v_A - w_A x r_A) . n
+        return (vx[b] - vx[a]) * nx + (vy[b] - vy[a]) * ny + w[b] * rn_b - w[a] * rn_a
+
+    def solve_normal(k):
+        a, b, nx, ny, rn_a, rn_b, _, _, ima, imb, iia, iib, mass_normal, _, wanted, _ = points[k]
+        change = mass_normal * (wanted - normal_velocity(k))
+        if accumulate:
+            old = normal_list[k]
+            normal_list[k] = max(old + change, 0.0)
+            change = normal_list[k] - old
+        else:
+            change = max(change, 0.0)
+            normal_list[k] += change
+        normal_change_list[k] = change
+        push(a, b, ima, imb, iia, iib, change * nx, change * ny, rn_a * change, rn_b * change)
+
+    def solve_block(k, k11, k12, k22):
+        """Points k and k + 1 together; b = v - target - K x_old (Box2D's b')."""
+        a, b, nx, ny, rn_a1, rn_b1, _, _, ima, imb, iia, iib, _, _, wanted1, _ = points[k]
+        rn_a2, rn_b2, wanted2 = points[k + 1][4], points[k + 1][5], points[k + 1][14]
+        old1, old2 = (normal_list[k], normal_list[k + 1]) if accumulate else (0.0, 0.0)
+        b1 = normal_velocity(k) - wanted1 - (k11 * old1 + k12 * old2)
+        b2 = normal_velocity(k + 1) - wanted2 - (k12 * old1 + k22 * old2)
+        x1, x2 = block_normal_impulses(k11, k12, k22, b1, b2)
+        if x1 != x1:  # nan: no case fits (rounding); keep the impulses
+            x1, x2 = old1, old2
+        change1, change2 = x1 - old1, x2 - old2
+        normal_list[k] += change1
+        normal_list[k + 1] += change2
+        normal_change_list[k], normal_change_list[k + 1] = change1, change2
+        change = change1 + change2
+        push(a, b, ima, imb, iia, iib, change * nx, change * ny,
+             rn_a1 * change1 + rn_a2 * change2, rn_b1 * change1 + rn_b2 * change2)
+
+    def solve_friction(k):
+        a, b, nx, ny, _, _, rt_a, rt_b, ima, imb, iia, iib, _, mass_tangent, _, mu = points[k]
+        if mu == 0.0:
+            return
+        # Friction along t = (ny, -nx), Coulomb bound mu times the normal impulse.
+        tangent_velocity = (vx[b] - vx[a]) * ny - (vy[b] - vy[a]) * nx + w[b] * rt_b - w[a] * rt_a
+        change = -mass_tangent * tangent_velocity
+        if accumulate:
+            bound = mu * normal_list[k]
+            old = tangent_list[k]
+            tangent_list[k] = min(max(old + change, -bound), bound)
+            change = tangent_list[k] - old
+        else:
+            bound = mu * normal_change_list[k]
+            change = min(max(change, -bound), bound)
+            tangent_list[k] += change
+        push(a, b, ima, imb, iia, iib, change * ny, -change * nx, rt_a * change, rt_b * change)
+
+    # With accumulated impulses friction comes first, as in Box2D, bounded by the normal
+    # totals so far, and the normal impulses have the last word in every sweep.
+    # Clamped increments need this sweep's normal increment, so friction comes after.
+    friction_first = accumulate
+    for _ in range(iterations):
+        for first, count, block, k11, k12, k22 in manifolds:
+            if friction_first:
+                for k in range(first, first + count):
+                    solve_friction(k)
+            if block:
+                solve_block(first, k11, k12, k22)
+            for k in range(first, first + count):
+                if not block:
+                    solve_normal(k)
+                if not friction_first:
+                    solve_friction(k)
+    normal_total[:] = normal_list
+    tangent_total[:] = tangent_list
+    return np.array([vx, vy, w], dtype=float).T.reshape(-1, 3)
+
+
+def sweep_batched(velocity: np.ndarray, rows: SweepRows, iterations: int, accumulate: bool,
+                  normal_total: np.ndarray, tangent_total: np.ndarray) -> np.ndarray:
+    """The same sweeps as :func:`sweep_loop`, one colour (numpy batches) at a time.
+
+    Within a batch (``rows.bounds``) no movable body appears twice, so its manifolds
+    can be solved together, a few numpy operations per batch instead of a Python loop
+    over its points.  Each manifold sees its impulses in the same order as in the
+    loop, so the result is the same up to rounding.  Same parameters and result as
+    :func:`sweep_loop`.
+
+    >>> rows = SweepRows(*[np.array([x]) for x in (0, 1, 0.0, 1.0, 0.0, 0.0, 0.0, 0.5, 0.0, 1.0, 0.0, 2.0,
+    ...                                            1.0, 1 / 1.5, 0.0, 0.0, 0, 1, False, 0.0, 0.0, 0.0)],
+    ...                  bounds=np.array([0, 1]))
+    >>> sweep_batched(np.array([[0.0, 0.0, 0.0], [0.0, -1.0, 0.0]]), rows, 1, True, np.zeros(1), np.zeros(1)).tolist()
+    [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
+    """
+    r = rows
+    # Per point and body (axis 0: A, B): Jacobian rows J (v_n = sum of J . (vx, vy, w))
+    # and the velocity change per unit impulse M^-1 J^T.
+    inverse_masses = np.stack([np.column_stack([r.ima, r.ima, r.iia]), np.column_stack([r.imb, r.imb, r.iib])])
+    jacobian_normal = np.stack([np.column_stack([-r.nx, -r.ny, -r.rn_a]), np.column_stack([r.nx, r.ny, r.rn_b])])
+    jacobian_tangent = np.stack([np.column_stack([-r.ny, r.nx, -r.rt_a]), np.column_stack([r.ny, -r.nx, r.rt_b])])
+    response_normal = jacobian_normal * inverse_masses
+    response_tangent = jacobian_tangent * inverse_masses
+
+    def point_batch(points, normal, friction):
+        """Data of one batch of points (one per manifold of a colour)."""
+        return (points, np.concatenate([r.a[points], r.b[points]]), len(points), normal, friction,
+                jacobian_normal[:, points], response_normal[:, points],
+                jacobian_tangent[:, points], response_tangent[:, points],
+                r.mass_normal[points], r.mass_tangent[points], r.target[points], r.friction[points])
+
+    # Per batch, each manifold sees its impulses in the order of sweep_loop: with
+    # accumulated impulses the friction of all first points, then of all second points,
+    # then the block normal pairs and the other manifolds' first and second normals;
+    # without, the block pairs then their friction, and the other manifolds' first then
+    # second points (normal, then friction).  Manifolds of one batch share no movable
+    # body, so block and point-by-point manifolds do not interfere.
+    steps = []
+    friction_first = accumulate
+    for start, stop in zip(r.bounds[:-1].tolist(), r.bounds[1:].tolist()):
+        first, count, block = r.first[start:stop], r.count[start:stop], r.block[start:stop]
+        slots = [first[count > slot] + slot for slot in (0, 1)]
+        if friction_first:
+            for points in slots:
+                if np.any(r.friction[points] != 0.0):
+                    steps.append(("points", point_batch(points, False, True)))
+        if block.any():
+            p1 = first[block]
+            p2 = p1 + 1
+            steps.append(("block", (p1, p2, np.concatenate([r.a[p1], r.b[p1]]), len(p1),
+                                    jacobian_normal[:, p1], jacobian_normal[:, p2],
+                                    response_normal[:, p1], response_normal[:, p2],
+                                    r.target[p1], r.target[p2], r.k11[start:stop][block],
+                                    r.k12[start:stop][block], r.k22[start:stop][block])))
+            if not friction_first:
+                for points in (p1, p2):
+                    if np.any(r.friction[points] != 0.0):
+                        steps.append(("points", point_batch(points, False, True)))
+        for slot in (0, 1):
+            points = first[~block & (count > slot)] + slot
+            if len(points):
+                steps.append(("points", point_batch(points, True, not friction_first
+                                                    and bool(np.any(r.friction[points] != 0.0)))))
+
+    velocity = velocity.copy()
+    normal_change = np.zeros(len(normal_total))  # this sweep's normal increments (bound without accumulation)
+    for _ in range(iterations):
+        for kind, data in steps:
+            if kind == "block":
+                _block_batch(velocity, data, accumulate, normal_total, normal_change)
+            else:
+                _point_batch(velocity, data, accumulate, normal_total, tangent_total, normal_change)
+    return velocity
+
+
+def _point_batch(velocity, data, accumulate, normal_total, tangent_total, normal_change) -> None:
+    """Normal and/or friction impulses of a batch of points that share no movable body."""
+    (points, bodies_ab, size, do_normal, do_friction, j_normal, m_normal, j_tangent, m_tangent,
+     mass_n, mass_t, wanted, mu) = data
+    v = velocity[bodies_ab].reshape(2, size, 3)
+    if do_normal:
+        change = mass_n * (wanted - (v * j_normal).sum(axis=2).sum(axis=0))
+        total = normal_total[points]
+        if accumulate:
+            new = np.maximum(total + change, 0.0)
+            change = new - total
+        else:
+            np.maximum(change, 0.0, out=change)
+            new = total + change
+        normal_total[points] = new
+        normal_change[points] = change
+        v += m_normal * change[:, None]
+    if do_friction:
+        change = -mass_t * (v * j_tangent).sum(axis=2).sum(axis=0)
+        bound = mu * (normal_total[points] if accumulate else normal_change[points])
+        tangent = tangent_total[points]
+        if accumulate:
+            new = np.clip(tangent + change, -bound, bound)
+            change = new - tangent
+        else:
+            change = np.clip(change, -bound, bound)
+            new = tangent + change
+        tangent_total[points] = new
+        v += m_tangent * change[:, None]
+    velocity[bodies_ab] = v.reshape(-1, 3)
+
+
+def _block_batch(velocity, data, accumulate, normal_total, normal_change) -> None:
+    """:func:`block_normal_impulses` for a batch of two-point manifolds sharing no movable body."""
+    (p1, p2, bodies_ab, size, j1, j2, m1, m2, wanted1, wanted2, k11, k12, k22) = data
+    v = velocity[bodies_ab].reshape(2, size, 3)
+    old1, old2 = (normal_total[p1], normal_total[p2]) if accumulate else (np.zeros(size), np.zeros(size))
+    b1 = (v * j1).sum(axis=2).sum(axis=0) - wanted1 - (k11 * old1 + k12 * old2)
+    b2 = (v * j2).sum(axis=2).sum(axis=0) - wanted2 - (k12 * old1 + k22 * old2)
+    # The four cases of block_normal_impulses, the first that fits wins.
+    det = k11 * k22 - k12 * k12
+    both1, both2 = (k12 * b2 - k22 * b1) / det, (k12 * b1 - k11 * b2) / det
+    only1, only2 = -b1 / k11, -b2 / k22
+    case_both = (both1 >= 0.0) & (both2 >= 0.0)
+    case_1 = ~case_both & (only1 >= 0.0) & (k12 * only1 + b2 >= 0.0)
+    case_2 = ~case_both & ~case_1 & (only2 >= 0.0) & (k12 * only2 + b1 >= 0.0)
+    case_none = ~case_both & ~case_1 & ~case_2 & (b1 >= 0.0) & (b2 >= 0.0)
+    stuck = ~(case_both | case_1 | case_2 | case_none)   # rounding: keep the impulses
+    x1 = np.where(case_both, both1, np.where(case_1, only1, 0.0))
+    x2 = np.where(case_both, both2, np.where(case_2, only2, 0.0))
+    x1 = np.where(stuck, old1, x1)
+    x2 = np.where(stuck, old2, x2)
+    change1, change2 = x1 - old1, x2 - old2
+    normal_total[p1] += change1
+    normal_total[p2] += change2
+    normal_change[p1], normal_change[p2] = change1, change2
+    v += m1 * change1[:, None] + m2 * change2[:, None]
+    velocity[bodies_ab] = v.reshape(-1, 3)
+
+
+def pyramid_contacts(base: int = 20, size: float = 1.0, gap: float = 0.125,
+                     depth: float = 0.001) -> tuple[list[Body], list[tuple[int, int, Contact]]]:
+    """Bodies and hand-made 2-point manifolds of a pyramid of boxes on static ground.
+
+    Row ``r`` (0 at the bottom) holds ``base - r`` boxes of side ``size`` (m), ``gap``
+    (m) apart, each resting on the two boxes below it, every contact ``depth`` (m)
+    deep.  ``base = 20`` gives 210 boxes and 800 contact points.  Used to time the
+    solver without a narrow phase.
+
+    >>> bodies, manifolds = pyramid_contacts(base=3)
+    >>> len(bodies), len(manifolds), sum(len(c.points) for _, _, c in manifolds)
+    (7, 9, 18)
+    """
+    bodies = [Body.box(2.0 * base * (size + gap), size, position=(0.0, -size / 2), is_static=True)]
+    manifolds = []
+    below: list[int] = []
+    pitch = size + gap
+    for row in range(base):
+        this_row = []
+        for column in range(base - row):
+            x = (column - (base - row - 1) / 2) * pitch
+            y = size / 2 + row * (size - depth)
+            bodies.append(Body.box(size, size, position=(x, y), friction=0.6))
+            index = len(bodies) - 1
+            this_row.append(index)
+            bottom = y - size / 2 + depth / 2
+            supports = [0] if row == 0 else below[column:column + 2]
+            for support in supports:
+                left = max(x, float(bodies[support].position[0]) if support else x) - size / 2
+                right = min(x, float(bodies[support].position[0]) if support else x) + size / 2
+                manifolds.append((support, index, Contact((0.0, 1.0), depth, [(left, bottom), (right, bottom)],
+                                                          feature_ids=("left", "right"))))
+        below = this_row
+    return bodies, manifolds
+
+
+def main(steps: int = 20, dt: float = 1 / 60) -> None:
+    """Print the time of one :meth:`ContactSolver.solve` on the contacts of pyramids.
+
+    The boxes start each step at rest plus one step of gravity; the figure is the
+    fastest of ``steps`` warm-started solves (other processes only add time).
+    """
+    print("pyramid contacts, time per ContactSolver.solve() (best of %d)" % steps)
+    for base in (16, 20):
+        bodies, manifolds = pyramid_contacts(base)
+        points = sum(len(c.points) for _, _, c in manifolds)
+        for iterations in (10, 30):
+            for sweep in ("loop", "batched"):
+                solver = ContactSolver(SolverSettings(iterations=iterations, sweep=sweep))
+                elapsed = []
+                for _ in range(steps):
+                    for body in bodies[1:]:
+                        body.velocity = np.array((0.0, -9.81 * dt))
+                        body.angular_velocity = 0.0
+                    start = time.perf_counter()
+                    solver.solve(bodies, manifolds, dt)
+                    elapsed.append(time.perf_counter() - start)
+                print(f"  {len(bodies) - 1:4d} boxes {points:4d} points {iterations:3d} iterations "
+                      f"{sweep:8s} {1e3 * min(elapsed):7.2f} ms")
+
+
+if __name__ == "__main__":
+    main()

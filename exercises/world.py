@@ -1,0 +1,216 @@
+# Generated from solutions/world.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+"""The world step: integrate forces, broad phase, narrow phase, resolve, integrate.
+
+:meth:`World.step` reads like the algorithm (as box2d-lite's ``World::Step`` does)::
+
+    for each sub-step of length h = dt / substeps:
+        apply gravity             v += h g                      (dynamic bodies)
+        broad phase               candidate pairs (i, j), i < j, never static-static
+        narrow phase              manifolds (i, j, Contact), normal from body i to body j
+        resolve                   sequential impulses on velocities (solver settings)
+        sweep bullets             continuous detection: fast bodies stop at first contact
+        integrate positions       x += h v, angle += h w
+        correct positions         linear projection / split impulse, if the solver uses it
+
+Every technique is a switch of :class:`WorldSettings` or of the solver's
+:class:`~solutions.response.contact_solver.SolverSettings`, so a learner can turn one
+off and watch what changes.  A scene (:mod:`solutions.scenes`) sets only what it needs.
+Units: SI; ``gravity`` in m/s^2, ``dt`` in s.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .body import Body
+from .broadphase.aabb_array import aabb_array
+from .broadphase.brute_force import pairs_brute_force
+from .broadphase.quadtree import pairs_quadtree
+from .broadphase.sorted_grid_numpy import pairs_grid_numpy
+from .broadphase.uniform_grid import pairs_uniform_grid, suggest_cell_size
+from .continuous import swept_aabb, time_of_impact
+from .contact import Contact
+from .narrowphase.dispatch import collide
+from .response.contact_solver import ContactSolver, SolverSettings
+from .shapes import Shape, bounding_aabb
+
+BROAD_PHASES = ("auto", "all_pairs", "brute_force", "uniform_grid", "quadtree", "numpy_grid")
+
+
+@dataclass
+class WorldSettings:
+    """Switches of the world step.
+
+    Attributes
+    ----------
+    gravity : (float, float)
+        Acceleration of gravity (m/s^2).
+    broad_phase : str
+        One of ``BROAD_PHASES``.  ``"auto"`` tests all pairs directly below
+        ``broad_phase_min_bodies`` bodies (a broad phase costs more than it saves
+        there) and uses the numpy grid above.
+    broad_phase_min_bodies : int
+        Scene size from which ``"auto"`` runs a broad phase.
+    continuous : bool
+        Sweep bodies flagged ``is_bullet`` against static bodies (no tunnelling).
+    substeps : int
+        Sub-steps per call of :meth:`World.step`.
+    solver : SolverSettings
+        Switches of the contact solver.
+    """
+
+    gravity: tuple[float, float] = (0.0, -9.81)
+    broad_phase: str = "auto"
+    broad_phase_min_bodies: int = 16
+    continuous: bool = True
+    substeps: int = 1
+    solver: SolverSettings = field(default_factory=SolverSettings)
+
+    def __post_init__(self):
+        if self.broad_phase not in BROAD_PHASES:
+            raise ValueError(f"broad_phase must be one of {BROAD_PHASES}, got {self.broad_phase!r}")
+        if int(self.substeps) != self.substeps or self.substeps < 1:
+            raise ValueError(f"substeps must be a whole number >= 1, got {self.substeps}")
+        g = np.asarray(self.gravity, dtype=float)
+        if g.shape != (2,) or not np.all(np.isfinite(g)):
+            raise ValueError(f"gravity must be a finite (gx, gy), got {self.gravity}")
+
+
+@dataclass
+class StepStats:
+    """What the last sub-step saw: pair counts and the deepest penetration (m)."""
+
+    candidate_pairs: int = 0
+    manifolds: int = 0
+    contact_points: int = 0
+    max_penetration: float = 0.0
+    bullets_stopped: int = 0
+
+
+class World:
+    """A list of bodies stepped under :class:`WorldSettings`.
+
+    >>> from exercises.body import Body
+    >>> ground = Body.box(10, 1, is_static=True, position=(0, -0.5))
+    >>> ball = Body.circle(0.5, mass=1.0, position=(0, 2))
+    >>> world = World([ground, ball])
+    >>> for _ in range(120):
+    ...     world.step(1 / 60)
+    >>> bool(0.45 < ball.position[1] < 0.55)   # resting on the ground
+    True
+    """
+
+    def __init__(self, bodies: list[Body], settings: WorldSettings | None = None):
+        self.bodies = list(bodies)
+        self.settings = settings or WorldSettings()
+        self.solver = ContactSolver(self.settings.solver)
+        self.time = 0.0
+        self.manifolds: list[tuple[int, int, Contact]] = []
+        self.stats = StepStats()
+        self._static_shapes: dict[int, Shape] = {}
+
+    # The algorithm --------------------------------------------------------------
+    def step(self, dt: float) -> None:
+        """Advance the world by ``dt`` seconds (``substeps`` sub-steps)."""
+        if not (dt > 0 and math.isfinite(dt)):
+            raise ValueError(f"dt must be a positive number of seconds, got {dt}")
+        h = dt / self.settings.substeps
+        for _ in range(self.settings.substeps):
+            self.apply_gravity(h)
+            shapes = self.world_shapes()
+            pairs = self.broad_phase(shapes)
+            self.manifolds = self.narrow_phase(shapes, pairs)
+            self.solver.solve(self.bodies, self.manifolds, h)
+            displacements = self.sweep_bullets(shapes, h)
+            self.integrate_positions(displacements, h)
+            self.solver.finish_step(self.bodies, self.manifolds, h)
+            self.time += h
+
+    # The stages -----------------------------------------------------------------
+    def apply_gravity(self, h: float) -> None:
+        """v += h g for every dynamic body."""
+        g = np.asarray(self.settings.gravity, dtype=float)
+        for body in self.bodies:
+            if not body.is_static:
+                body.velocity = body.velocity + h * g
+
+    def world_shapes(self) -> list[Shape]:
+        """Every body's shape in world coordinates (static ones computed once)."""
+        shapes = []
+        for index, body in enumerate(self.bodies):
+            if body.is_static:
+                if index not in self._static_shapes:
+                    self._static_shapes[index] = body.world_shape()
+                shapes.append(self._static_shapes[index])
+            else:
+                shapes.append(body.world_shape())
+        return shapes
+
+    def broad_phase(self, shapes: list[Shape]) -> list[tuple[int, int]]:
+        """Candidate pairs (i, j), i < j, whose AABBs overlap or touch; no static-static pair."""
+        method = self.settings.broad_phase
+        n = len(shapes)
+        if method == "auto":
+            method = "all_pairs" if n < self.settings.broad_phase_min_bodies else "numpy_grid"
+        if method == "all_pairs":
+            pairs = ((i, j) for i in range(n) for j in range(i + 1, n))
+        else:
+            aabbs = aabb_array(shapes)
+            if method == "brute_force":
+                pairs = sorted(pairs_brute_force(aabbs))
+            elif method == "uniform_grid":
+                pairs = sorted(pairs_uniform_grid(aabbs, cell_size=suggest_cell_size(aabbs)))
+            elif method == "quadtree":
+                pairs = sorted(pairs_quadtree(aabbs))
+            else:
+                pairs = [tuple(p) for p in pairs_grid_numpy(aabbs).tolist()]
+        static = [b.is_static for b in self.bodies]
+        kept = [(i, j) for i, j in pairs if not (static[i] and static[j])]
+        self.stats = StepStats(candidate_pairs=len(kept))
+        return kept
+
+    def narrow_phase(self, shapes: list[Shape], pairs) -> list[tuple[int, int, Contact]]:
+        """Contact manifolds of the candidate pairs that really touch."""
+        manifolds = []
+        for i, j in pairs:
+            contact = collide(shapes[i], shapes[j])
+            if contact is not None:
+                manifolds.append((i, j, contact))
+        self.stats.manifolds = len(manifolds)
+        self.stats.contact_points = sum(len(c.points) for _, _, c in manifolds)
+        self.stats.max_penetration = max((c.depth for _, _, c in manifolds), default=0.0)
+        return manifolds
+
+    def sweep_bullets(self, shapes: list[Shape], h: float) -> dict[int, np.ndarray]:
+        """Displacements of bullets cut short at their first contact with a static body."""
+        displacements: dict[int, np.ndarray] = {}
+        if not self.settings.continuous:
+            return displacements
+        statics = [k for k, b in enumerate(self.bodies) if b.is_static]
+        for index, body in enumerate(self.bodies):
+            if not body.is_bullet or body.is_static:
+                continue
+            move = h * body.velocity
+            sweep = swept_aabb(shapes[index], move)
+            first = 1.0
+            for k in statics:
+                box = bounding_aabb(shapes[k])
+                if np.all(box.min_corner <= sweep.max_corner) and np.all(sweep.min_corner <= box.max_corner):
+                    t = time_of_impact(shapes[index], move, shapes[k])
+                    if t is not None and t > 0.0:
+                        first = min(first, t)
+            if first < 1.0:
+                displacements[index] = first * move
+                self.stats.bullets_stopped += 1
+        return displacements
+
+    def integrate_positions(self, displacements: dict[int, np.ndarray], h: float) -> None:
+        """x += h v (or a bullet's cut-short displacement), angle += h w."""
+        for index, body in enumerate(self.bodies):
+            if body.is_static:
+                continue
+            body.position = body.position + displacements.get(index, h * body.velocity)
+            if not body.fixed_rotation:
+                body.angle += h * body.angular_velocity

@@ -62,6 +62,7 @@ def pymunk_trajectory(dt: float, restitution: float = 0.5, friction: float = 0.2
 
 
 def run_driver(code) -> tuple[np.ndarray, float, float]:
+    code.sandbox.call("scene_driver", "drop_balls", [2], timeout=60.0)  # untimed: imports, first calls
     result = code.sandbox.call("scene_driver", "drop_balls", [STEPS], timeout=60.0)
     data = code.value_of(result, "the ball scene with your resolve_collision")
     trajectory = np.array(data["trajectory"], dtype=float)

@@ -1,0 +1,256 @@
+"""``grader check`` and its pictures: what a student sees for passing, stub and wrong code.
+
+The runs go through the real sandboxed worker on three packages: the reference
+(``solutions/``), the generated stubs (``exercises/``) and a copy of the reference with
+one bug (``collide_circle_circle`` returns the normal from B to A).
+"""
+from __future__ import annotations
+
+import base64
+import importlib
+import io
+import re
+import shutil
+import subprocess
+import sys
+import types
+from pathlib import Path
+
+import matplotlib.image
+import numpy as np
+import pytest
+
+from grader import figures as grader_figures
+from grader.check import CheckError, check, find_package, main, select_tests
+from grader.figures import EXPECTED_COLOR, EXTRA_COLOR, GOT_COLOR, MISSED_COLOR, draw_figure, figure_png_base64, save_figure
+from grader.spec import load_spec
+
+check_module = importlib.import_module("grader.check")  # `grader.check` may name the function
+REPO = Path(__file__).resolve().parents[1]
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+PUBLIC_EXERCISES = ("momentum", "grid", "quadtree", "sat", "contacts", "impulse")
+
+
+@pytest.fixture(scope="module")
+def wrong_package(tmp_path_factory) -> Path:
+    """A submission folder: the reference with the circle-circle normal flipped."""
+    root = tmp_path_factory.mktemp("wrong")
+    shutil.copytree(REPO / "solutions", root / "exercises", ignore=shutil.ignore_patterns("__pycache__"))
+    module = root / "exercises" / "narrowphase" / "circle_circle.py"
+    source = module.read_text()
+    buggy = source.replace("return Contact(normal, reach - distance", "return Contact(-normal, reach - distance")
+    assert buggy != source, "the reference changed: update the bug planted by this test"
+    module.write_text(buggy)
+    return root
+
+
+def png_pixels(data: bytes) -> np.ndarray:
+    assert data.startswith(PNG_SIGNATURE)
+    return matplotlib.image.imread(io.BytesIO(data), format="png")[..., :3]
+
+
+def pixels_near(image: np.ndarray, color: str, tolerance: float = 0.08) -> int:
+    """How many pixels are within ``tolerance`` (per channel, 0-1) of ``color``."""
+    rgb = np.array([int(color[k:k + 2], 16) / 255 for k in (1, 3, 5)])
+    return int(np.sum(np.all(np.abs(image - rgb) < tolerance, axis=-1)))
+
+
+# Runs on the three packages -----------------------------------------------------------
+def test_reference_passes_every_public_test():
+    report = check(package="solutions", show=False)
+    public = [t for t in load_spec() if t.public]
+    assert [r.name for r in report.rows] == [t.name for t in public]
+    assert report.passed, [(r.name, r.message) for r in report.rows if not r.passed]
+    assert report.score == report.max_score == sum(t.points for t in public)
+    assert "all 25 tests passed" in report.summary() or f"all {len(public)} tests passed" in report.summary()
+
+
+def test_stubs_say_not_implemented_yet_and_show_no_traceback():
+    report = check(package=REPO / "exercises", show=False)
+    assert report.rows and {r.status for r in report.rows} == {"not_implemented"}
+    assert report.score == 0 and not report.passed
+    text, page = report.text(), report.html()
+    for row in report.rows:
+        block = check_module.format_row(row)
+        assert "not implemented yet" in block and "TO DO" in block
+        # The message names the function and the file to write it in.
+        function = row.message.split(":")[0].rsplit(".", 1)[1]
+        assert f"write {function}()" in block
+    for shown in (text, page):
+        assert "Traceback" not in shown and 'File "' not in shown
+    assert page.count("not implemented yet") >= len(report.rows)
+
+
+def test_wrong_normal_is_explained_with_a_picture_in_a_shell(wrong_package, tmp_path, capsys):
+    folder = tmp_path / "figures"
+    status = main(["contacts", "--package", str(wrong_package), "--figures", str(folder)])
+    out = capsys.readouterr().out
+    assert status == 1
+    rows = {m.group(2): m.group(1) for m in re.finditer(r"^(PASS|FAIL)\s.*\[(contacts\.\w+)\]$", out, re.M)}
+    assert rows == {"contacts.circle_circle": "FAIL", "contacts.circle_polygon": "PASS",
+                    "contacts.polygon_polygon": "PASS", "contacts.face_face": "PASS"}
+    words = " ".join(out.split())  # messages are wrapped to the terminal's width
+    assert "the normal points from B to A: expected [0, 1], got [-0, -1]" in words
+    printed = re.findall(r"picture of the failing case: (\S+)", out)
+    assert printed == [str(folder / "contacts.circle_circle.png")]
+    data = Path(printed[0]).read_bytes()
+    assert len(data) > 0 and png_pixels(data).std() > 0.05
+    assert "Traceback" not in out and "Score 9/11 points" in out
+
+
+def test_check_outside_a_notebook_prints_the_table_and_returns_an_html_report(wrong_package, tmp_path, capsys):
+    report = check("contacts.circle_circle", package=wrong_package, figures=tmp_path)
+    out = capsys.readouterr().out
+    assert [r.status for r in report.rows] == ["failed"] and report.score == 0
+    assert "FAIL" in out and str(tmp_path / "contacts.circle_circle.png") in out
+    assert (tmp_path / "contacts.circle_circle.png").stat().st_size > 0
+    page = report._repr_html_()
+    assert "data:image/png;base64," in page and ">FAIL<" in page and "0 / 2" in page
+    # The message is escaped, not interpreted: shape reprs keep their brackets.
+    assert "Circle(center=[0.0, 0.0], radius=1.0)" in page
+    encoded = re.search(r"data:image/png;base64,([A-Za-z0-9+/=]+)", page).group(1)
+    assert png_pixels(base64.b64decode(encoded)).std() > 0.05
+
+
+def test_check_in_a_notebook_displays_html_once(monkeypatch):
+    shown = []
+    ipython = types.ModuleType("IPython")
+    display_module = types.ModuleType("IPython.display")
+    ipython.get_ipython = lambda: types.SimpleNamespace(kernel=object())
+    display_module.HTML = lambda text: ("HTML", text)
+    display_module.display = shown.append
+    ipython.display = display_module
+    monkeypatch.setitem(sys.modules, "IPython", ipython)
+    monkeypatch.setitem(sys.modules, "IPython.display", display_module)
+    report = check("momentum", package="solutions")
+    assert len(shown) == 1 and shown[0][0] == "HTML" and ">PASS<" in shown[0][1]
+    assert report._repr_html_() is None  # already shown: the cell's Out is the one-line repr
+    assert repr(report) == "<CheckReport momentum: 6/6 points, 3/3 tests passed>"
+
+
+def test_shell_command_exit_codes(wrong_package):
+    def run(*args, cwd=REPO):
+        return subprocess.run([sys.executable, "-m", "grader", "check", *args], cwd=cwd, capture_output=True,
+                              text=True, timeout=120)
+
+    passing = run("momentum", "--package", "solutions")
+    assert passing.returncode == 0, passing.stderr
+    assert "all 3 tests passed" in passing.stdout
+    stubs = run("momentum")  # default: exercises/ of the current folder
+    assert stubs.returncode == 1 and stubs.stdout.count("TO DO") == 3
+    unknown = run("gird")
+    assert unknown.returncode == 2 and unknown.stdout == ""
+    assert "unknown exercise 'gird'" in unknown.stderr
+    assert all(name in unknown.stderr for name in PUBLIC_EXERCISES)
+    assert "Traceback" not in passing.stderr + stubs.stderr + unknown.stderr
+
+
+def test_unknown_exercise_is_a_clear_error():
+    with pytest.raises(CheckError, match=r"unknown exercise 'sta': choose one of momentum, grid, quadtree, sat"):
+        check("sta", package="solutions", show=False)
+    assert [t.exercise for t in select_tests("grid")] == ["grid"] * 3
+    assert [t.name for t in select_tests("sat.project_circle")] == ["sat.project_circle"]
+
+
+def test_where_the_package_is_found(monkeypatch, tmp_path, wrong_package):
+    monkeypatch.delenv(check_module.PACKAGE_VARIABLE, raising=False)
+    monkeypatch.chdir(wrong_package)
+    assert find_package() == wrong_package / "exercises"
+    monkeypatch.chdir(wrong_package / "exercises" / "narrowphase")  # a parent folder holds exercises/
+    assert find_package() == wrong_package / "exercises"
+    assert find_package("solutions") == REPO / "solutions"  # relative to the repository root
+    monkeypatch.setenv(check_module.PACKAGE_VARIABLE, str(REPO / "solutions"))
+    assert find_package() == REPO / "solutions"
+    assert find_package(wrong_package) == wrong_package / "exercises"  # the argument wins
+    with pytest.raises(CheckError, match="no folder"):
+        find_package(tmp_path / "missing")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(CheckError, match="no Python package"):
+        find_package(tmp_path / "empty")
+
+
+def test_not_implemented_message_names_the_file():
+    row = check_module.CheckRow("t", "T", "grid", "not_implemented", 0, 1,
+                                "broadphase.uniform_grid.pairs_grid_every_cell: not implemented yet")
+    assert check_module.student_message(row) == (
+        "not implemented yet: write pairs_grid_every_cell() in exercises/broadphase/uniform_grid.py "
+        "(it still raises NotImplementedError)")
+
+
+# Pictures --------------------------------------------------------------------------------------
+CIRCLE_A = {"$shape": "Circle", "center": [0.0, 0.0], "radius": 1.0}
+CONTACT_UP = {"$contact": True, "normal": [0.0, 1.0], "depth": 0.5, "points": [[0.0, 0.75]]}
+CONTACT_DOWN = {"$contact": True, "normal": [0.0, -1.0], "depth": 0.5, "points": [[0.2, 0.75]]}
+SHAPES_B = [
+    {"$shape": "Circle", "center": [0.0, 1.5], "radius": 1.0},
+    {"$shape": "AABB", "min_corner": [-1.0, 0.5], "max_corner": [1.0, 2.0]},
+    {"$shape": "OBB", "center": [0.3, 1.4], "half_extents": [1.0, 0.5], "angle": 0.4},
+    {"$shape": "ConvexPolygon", "vertices": [[-1.0, 0.5], [1.0, 0.5], [0.0, 2.0]]},
+]
+
+
+def image_of(figure: dict) -> np.ndarray:
+    return png_pixels(base64.b64decode(figure_png_base64(figure)))
+
+
+@pytest.mark.parametrize("shape_b", SHAPES_B, ids=lambda s: s["$shape"])
+def test_shapes_figure_draws_both_shapes_and_both_normals(shape_b):
+    figure = {"kind": "shapes", "title": "collide: a case", "shapes": [CIRCLE_A, shape_b],
+              "expected": CONTACT_UP, "got": CONTACT_DOWN}
+    fig = draw_figure(figure)
+    ax = fig.axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("x (m)", "y (m)") and ax.get_aspect() == 1.0
+    assert {t.get_text() for t in ax.texts} >= {"A", "B"}
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(label.startswith("expected normal") for label in labels)
+    assert any(label.startswith("returned normal") for label in labels)
+    image = image_of(figure)
+    assert image.std() > 0.05  # not blank
+    assert pixels_near(image, EXPECTED_COLOR) > 100 and pixels_near(image, GOT_COLOR) > 100
+
+
+def test_shapes_figure_without_a_returned_contact_says_so():
+    figure = {"kind": "shapes", "title": "missed contact", "shapes": [CIRCLE_A, SHAPES_B[0]], "expected": CONTACT_UP}
+    labels = [t.get_text() for t in draw_figure(figure).axes[0].get_legend().get_texts()]
+    assert "returned: no contact (None or not a Contact)" in labels
+    # A returned contact that is not finite is drawn without crashing.
+    broken = dict(figure, got={"$contact": True, "normal": [float("nan"), 0.0], "depth": None, "points": [[1e308, 2]]})
+    assert image_of(broken).std() > 0.05
+
+
+def test_pairs_figure_highlights_missed_and_extra_pairs_on_the_grid(tmp_path):
+    figure = {"kind": "pairs", "title": "pairs_grid_every_cell: touching", "cell_size": 1.0,
+              "aabbs": [[0, 0, 1, 1], [1, 0, 2, 1], [2, 1, 3, 2], [4, 4, 5, 5], [2.2, 3.0, 2.8, 4.0]],
+              "missed": [[0, 1]], "extra": [[2, 4]]}
+    ax = draw_figure(figure).axes[0]
+    assert ax.get_aspect() == 1.0 and "1 overlapping pair missed" in ax.get_title()
+    labels = " ".join(t.get_text() for t in ax.get_legend().get_texts())
+    assert "missed pair: (0, 1)" in labels and "extra pair (boxes apart): (2, 4)" in labels and "grid cells" in labels
+    path = save_figure(figure, tmp_path / "pictures" / "pairs.png")
+    data = path.read_bytes()
+    assert path.stat().st_size > 0
+    image = png_pixels(data)
+    assert image.std() > 0.05
+    assert pixels_near(image, MISSED_COLOR) > 100 and pixels_near(image, EXTRA_COLOR) > 100
+
+
+def test_quadtree_figure_draws_the_root_bounds():
+    figure = {"kind": "pairs", "title": "pairs_quadtree: straddling", "cell_size": 0.0, "bounds": [0, 0, 16, 16],
+              "aabbs": [[7.5, 2, 8.5, 3], [7.0, 2.2, 7.6, 2.8], [1, 1, 2, 2]], "missed": [[0, 1]], "extra": []}
+    ax = draw_figure(figure).axes[0]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "quadtree root" in labels and not any("grid cells" in label for label in labels)
+    assert ax.get_xlim()[0] < 0 < 16 < ax.get_xlim()[1]
+    assert image_of(figure).std() > 0.05
+
+
+def test_unknown_figure_kind_is_refused():
+    with pytest.raises(ValueError, match="no picture for figures of kind 'omitted'"):
+        draw_figure({"kind": "omitted"})
+
+
+def test_drawing_leaves_no_pyplot_figures_open():
+    pyplot = pytest.importorskip("matplotlib.pyplot")
+    before = len(pyplot.get_fignums())
+    grader_figures.figure_png_base64({"kind": "shapes", "title": "t", "shapes": [CIRCLE_A, SHAPES_B[1]]})
+    assert len(pyplot.get_fignums()) == before

@@ -9,9 +9,12 @@ Isolation, strongest available first:
   process it leaves behind dies with it), and it runs as an unprivileged user of its
   own (one uid per parallel job) with no capabilities.
 - ``"plain"``: the same worker with the same CPU, memory and file limits but the
-  host's file system and user (for machines without bubblewrap: the reference
-  solutions are then only as hidden as file permissions make them, and the process
-  limit is not applied, since it would count every process of the grader's user).
+  host's file system (for machines without bubblewrap).  Run as root, and when Python
+  is installed where any user can run it, the worker still drops to its own
+  unprivileged user (with the process limit); the reference solutions are then as
+  hidden as their file permissions make them (the Gradescope runner makes them
+  readable by root only).  Otherwise it runs as the grader's user, without the
+  process limit, which would count every process of that user.
 
 Both apply resource limits (CPU seconds, address space, file size, processes, no core
 files) and a wall-clock timeout per call.  Only JSON crosses: requests on the worker's
@@ -115,6 +118,31 @@ def python_folders() -> list[str]:
     return sorted(f for f in folders if f and os.path.isdir(f))
 
 
+def _running(pid: str) -> bool:
+    """True while process ``pid`` exists and is not a zombie."""
+    try:
+        with open(f"/proc/{pid}/stat") as handle:
+            return handle.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def python_usable_by_anyone() -> bool:
+    """True when an unprivileged user can run this Python and read its libraries."""
+    paths = [Path(os.path.realpath(sys.executable)), *map(Path, python_folders())]
+    for path in paths:
+        for part in [path, *path.parents]:
+            try:
+                mode = part.stat().st_mode
+            except OSError:
+                return False
+            if part.is_dir() and not mode & stat.S_IXOTH:
+                return False
+        if not path.stat().st_mode & stat.S_IROTH:
+            return False
+    return True
+
+
 def copy_package(source: Path, destination: Path) -> None:
     """Copy the regular files of a package folder; symlinks and special files are skipped."""
     destination.mkdir(parents=True, exist_ok=True)
@@ -148,8 +176,9 @@ class Sandbox:
         self.limits = limits
         self.slot = slot
         self.isolation = choose_isolation(isolation)
-        # Only bubblewrap switches user: the process limit then counts that user alone.
-        self.uid = SANDBOX_UID_BASE + slot if self.isolation == "bwrap" else None
+        # A user of its own: the process limit then counts this sandbox alone.
+        can_switch = os.geteuid() == 0 and (self.isolation == "bwrap" or python_usable_by_anyone())
+        self.uid = SANDBOX_UID_BASE + slot if can_switch else None
         self.workdir: Path | None = None
         self.process: subprocess.Popen | None = None
         self._responses = None
@@ -219,6 +248,10 @@ class Sandbox:
         resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
         if self.uid is not None:
             resource.setrlimit(resource.RLIMIT_NPROC, (limits.processes, limits.processes))
+            if self.isolation == "plain":
+                os.setgroups([])
+                os.setgid(self.uid)
+                os.setuid(self.uid)
 
     def start(self) -> None:
         """Start (or restart) the worker process."""
@@ -349,6 +382,7 @@ class Sandbox:
         """
         if self.uid is None:
             return
+        killed: list[str] = []
         for entry in os.listdir("/proc"):
             if not entry.isdigit():
                 continue
@@ -363,8 +397,14 @@ class Sandbox:
                 continue
             try:
                 os.kill(int(entry), signal.SIGKILL)
+                killed.append(entry)
             except OSError:
                 pass
+        deadline = time.monotonic() + 1.0
+        while killed and time.monotonic() < deadline:  # SIGKILL lands asynchronously
+            killed = [pid for pid in killed if _running(pid)]
+            if killed:
+                time.sleep(0.005)
 
     def _crashed(self, started: float) -> CallResult:
         process = self.process

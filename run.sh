@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # One entry point for people and CI.  Each command creates the environment first.
-#   bash run.sh main    set up, simulate a named scene, run the benchmarks
-#   bash run.sh test    set up, check exercises/ is in sync, run the whole test suite
-#   bash run.sh setup   only create .venv and install the pinned dependencies
+#   bash run.sh main    set up, simulate a named scene, run the benchmarks, build the book
+#   bash run.sh test    set up, check exercises/ and the book's notebooks are in sync,
+#                       run the whole test suite (the book's tests included)
+#   bash run.sh setup   only create .venv and install the pinned dependencies, Chromium
+#                       and the book's MathJax
 #   bash run.sh bench   only the benchmarks (add --quick for a short run)
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -20,6 +22,21 @@ system_packages() {
             echo "warning: bubblewrap (bwrap) is not installed; the grader falls back to weaker isolation" >&2
         fi
     fi
+    # The book: Chromium renders the built pages in a test; npm vendors MathJax once.
+    apt_package chromium chromium "the book's browser test will be skipped"
+    apt_package npm npm "the book's MathJax cannot be vendored (math would need a CDN)"
+}
+
+# apt_package COMMAND PACKAGE CONSEQUENCE: install PACKAGE if COMMAND is missing (root only).
+apt_package() {
+    command -v "$1" >/dev/null 2>&1 && return 0
+    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+        (apt-get install -y -qq "$2" >/dev/null 2>&1 ||
+            (apt-get update -qq >/dev/null 2>&1 && apt-get install -y -qq "$2" >/dev/null 2>&1)) ||
+            echo "warning: could not install $2; $3" >&2
+    else
+        echo "warning: $1 is not installed (apt-get install $2); $3" >&2
+    fi
 }
 
 setup() {
@@ -30,10 +47,12 @@ setup() {
     local stamp="$VENV/.installed-$(sha1sum pyproject.toml | cut -c1-12)"
     if [ ! -f "$stamp" ]; then
         "$PY" -m pip install --quiet --upgrade pip
-        "$PY" -m pip install --quiet -e ".[dev]"
+        "$PY" -m pip install --quiet -e ".[dev,book]"
         rm -f "$VENV"/.installed-*
         touch "$stamp"
     fi
+    # MathJax from npm into book/_vendor, the book's Jupyter kernel: quiet once done.
+    "$PY" -m tools.book setup
 }
 
 command="${1:-main}"
@@ -44,6 +63,7 @@ case "$command" in
         setup
         "$PY" -m tools.demo "$@"
         "$PY" bench/run_all.py --quick
+        "$PY" -m tools.book build     # strict (-W -n --keep-going); prints where the HTML is
         ;;
     bench)
         setup
@@ -52,7 +72,9 @@ case "$command" in
     test)
         setup
         "$PY" -m tools.generate_exercises --check
-        "$PY" -m pytest -n 2 --doctest-modules solutions tools tests "$@"
+        "$PY" -m tools.book check
+        # --dist loadgroup: the book's tests share one build on one worker.
+        "$PY" -m pytest -n 2 --dist loadgroup --doctest-modules solutions tools tests "$@"
         ;;
     *)
         echo "unknown command '$command': use main, test, setup or bench" >&2

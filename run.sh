@@ -63,6 +63,10 @@ case "$command" in
         setup
         "$PY" -m tools.demo "$@"
         "$PY" bench/run_all.py --quick
+        # The bundled example class: reference, stubs and the classic bugs, graded.
+        "$PY" -m grader example-class --out out/example-class >/dev/null
+        "$PY" -m grader grade out/example-class/* --out out/grades --jobs 2
+        echo "class report: $(pwd)/out/grades/class_report.html (one report.html per submission beside it)"
         "$PY" -m tools.book build     # strict (-W -n --keep-going); prints where the HTML is
         ;;
     bench)

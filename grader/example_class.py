@@ -569,7 +569,8 @@ def build_example_class(out_dir: Path, samples: tuple[BuggySample, ...] = BUGGY_
 
 
 def points_lost(sample: BuggySample, tests) -> float:
-    """Points of the tests in ``tests`` (TestSpec list) that ``sample`` should fail."""
+    """Points at stake: those of the tests in ``tests`` (TestSpec list) that ``sample``
+    should fail (it loses all of them, or a share where a test gives partial credit)."""
     return sum(t.points for t in tests if t.name in sample.expected_failures)
 
 
@@ -592,7 +593,7 @@ def main_example_class(args: argparse.Namespace) -> int:
         return 1
     expected = {REFERENCE_SAMPLE: f"{total:g} / {total:g}", STUBS_SAMPLE: f"0 / {total:g}"}
     for sample in BUGGY_SAMPLES:
-        expected[sample.folder_name] = f"{total - points_lost(sample, tests):g} / {total:g}"
+        expected[sample.folder_name] = f"at least {total - points_lost(sample, tests):g}, below {total:g}"
     width = max(len(f.name) for f in folders)
     print(f"wrote {len(folders)} sample submissions to {args.out}:")
     for folder in folders:

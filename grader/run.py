@@ -33,6 +33,12 @@ class TestResult:
 
     @property
     def score(self) -> float:
+        """Full points for a pass; for a failure, the share of right cases if the spec
+        gives this test partial credit, else nothing."""
+        if self.outcome.status == "passed":
+            return float(self.test.points)
+        if not self.test.partial_credit:
+            return 0.0
         return round(self.test.points * max(0.0, min(1.0, self.outcome.fraction)), 6)
 
 

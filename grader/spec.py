@@ -35,6 +35,8 @@ class TestSpec:
     points: float
     visibility: str
     leaderboard: str | None = None
+    #: When true a failed test earns the share of its cases that were right.
+    partial_credit: bool = False
 
     @property
     def public(self) -> bool:
@@ -55,13 +57,14 @@ def load_spec(paths: list[Path] | None = None) -> list[TestSpec]:
             raise SpecError(f"{path}: cannot read the test spec: {exc}") from exc
         for number, entry in enumerate(data.get("test", []), start=1):
             where = f"{path}, test {number} ({entry.get('name', '?')})"
-            unknown = set(entry) - {"name", "exercise", "title", "points", "visibility", "leaderboard"}
+            unknown = set(entry) - {"name", "exercise", "title", "points", "visibility", "leaderboard", "partial_credit"}
             if unknown:
                 raise SpecError(f"{where}: unknown keys {sorted(unknown)}")
             try:
                 test = TestSpec(name=str(entry["name"]), exercise=str(entry["exercise"]),
                                 title=str(entry.get("title", entry["name"])), points=float(entry["points"]),
-                                visibility=str(entry.get("visibility", "visible")), leaderboard=entry.get("leaderboard"))
+                                visibility=str(entry.get("visibility", "visible")), leaderboard=entry.get("leaderboard"),
+                                partial_credit=bool(entry.get("partial_credit", False)))
             except KeyError as exc:
                 raise SpecError(f"{where}: missing key {exc}") from None
             except (TypeError, ValueError) as exc:

@@ -43,25 +43,28 @@ def compare_contacts(student, module: str, function: str, pairs: list, label: st
     cases = [(a, b, unambiguous(a, b)) for a, b in pairs]
     cases = [(a, b, want) for a, b, want in cases if want is not False]
     answers = student.call_many(module, function, [(a, b) for a, b, _ in cases])
-    for (a, b, want), got in zip(cases, answers):
-        message = compare_contact(got, want, CONTACT_ATOL)
-        if message is None:
-            continue
-        if strategy is not None:
-            def is_wrong(pair):
-                expected = unambiguous(*pair)
-                return expected is not False and compare_contact(student.call(module, function, *pair), expected,
-                                                                 CONTACT_ATOL) is not None
+    wrong = [(a, b, want, got) for (a, b, want), got in zip(cases, answers)
+             if compare_contact(got, want, CONTACT_ATOL) is not None]
+    if not wrong:
+        return Outcome.passed(f"{len(cases)} contacts agree with the reference")
+    a, b, want, got = wrong[0]
+    message = compare_contact(got, want, CONTACT_ATOL)
+    if strategy is not None:
+        def is_wrong(pair):
+            expected = unambiguous(*pair)
+            return expected is not False and compare_contact(student.call(module, function, *pair), expected,
+                                                             CONTACT_ATOL) is not None
 
-            small = smallest_failure(strategy, is_wrong)
-            if small is not None:
-                a, b = small
-                want = unambiguous(a, b)
-                got = student.call(module, function, a, b)
-                message = compare_contact(got, want, CONTACT_ATOL)
-        return Outcome.failed(f"{label}: {function}({a!r}, {b!r}): {message}",
-                              shapes_figure(a, b, f"{function}: {label}", want, got))
-    return Outcome.passed(f"{len(cases)} contacts agree with the reference")
+        small = smallest_failure(strategy, is_wrong)
+        if small is not None:
+            a, b = small
+            want = unambiguous(a, b)
+            got = student.call(module, function, a, b)
+            message = compare_contact(got, want, CONTACT_ATOL)
+    right = len(cases) - len(wrong)
+    return Outcome.failed(f"{label}: {len(wrong)} of {len(cases)} contacts wrong, e.g. {function}({a!r}, {b!r}): "
+                          f"{message}", shapes_figure(a, b, f"{function}: {label}", want, got),
+                          fraction=right / len(cases))
 
 
 @check("contacts.circle_circle")

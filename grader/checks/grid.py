@@ -32,24 +32,26 @@ def pairs_figure(aabbs: np.ndarray, missed: set, extra: set, cell_size: float, t
 def compare_on_scenes(student, function: str, scenes: list[tuple[np.ndarray, float]], label: str) -> Outcome:
     """Run ``function`` on every (aabbs, cell_size) scene; shrink the first failure."""
     answers = student.call_many(MODULE, function, [(aabbs, cell) for aabbs, cell in scenes])
-    for (aabbs, cell), answer in zip(scenes, answers):
-        message, missed, extra = compare_pairs(answer, pairs_brute_force(aabbs))
-        if message is None:
-            continue
+    wrong = [(aabbs, cell) for (aabbs, cell), answer in zip(scenes, answers)
+             if compare_pairs(answer, pairs_brute_force(aabbs))[0] is not None]
+    if not wrong:
+        return Outcome.passed(f"{len(scenes)} scenes agree with brute force")
+    aabbs, cell = wrong[0]
+    message, missed, extra = compare_pairs(student.call(MODULE, function, aabbs, cell), pairs_brute_force(aabbs))
 
-        def is_wrong(boxes, cell=cell):
-            boxes = np.array(boxes, dtype=float)
-            return compare_pairs(student.call(MODULE, function, boxes, cell), pairs_brute_force(boxes))[0] is not None
+    def is_wrong(boxes):
+        boxes = np.array(boxes, dtype=float)
+        return compare_pairs(student.call(MODULE, function, boxes, cell), pairs_brute_force(boxes))[0] is not None
 
-        small = smallest_failure(small_scenes, is_wrong)
-        if small is not None:
-            small = np.array(small, dtype=float)
-            message, missed, extra = compare_pairs(student.call(MODULE, function, small, cell), pairs_brute_force(small))
-            aabbs = small
-        where = f"{len(aabbs)} boxes, cell size {cell:g} m"
-        return Outcome.failed(f"{label} ({where}): {message}",
-                              pairs_figure(aabbs, missed, extra, cell, f"{function}: {label}"))
-    return Outcome.passed(f"{len(scenes)} scenes agree with brute force")
+    small = smallest_failure(small_scenes, is_wrong)
+    if small is not None:
+        small = np.array(small, dtype=float)
+        message, missed, extra = compare_pairs(student.call(MODULE, function, small, cell), pairs_brute_force(small))
+        aabbs = small
+    where = f"{len(aabbs)} boxes, cell size {cell:g} m"
+    return Outcome.failed(f"{label}: {len(wrong)} of {len(scenes)} scenes wrong, e.g. ({where}) {message}",
+                          pairs_figure(aabbs, missed, extra, cell, f"{function}: {label}"),
+                          fraction=1 - len(wrong) / len(scenes))
 
 
 def uniform_scenes(seed: int, count: int = 60, scenes: int = 5) -> list[tuple[np.ndarray, float]]:

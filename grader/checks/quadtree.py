@@ -26,26 +26,29 @@ def compare_quadtree(student, scenes: list[tuple[np.ndarray, dict]], label: str)
     """Run pairs_quadtree(aabbs, **options) on each scene; shrink the first failure."""
     answers = [student.call(MODULE, FUNCTION, aabbs, options.get("bounds"), options.get("max_bodies_per_node", 2))
                for aabbs, options in scenes]
-    for (aabbs, options), answer in zip(scenes, answers):
-        message, missed, extra = compare_pairs(answer, pairs_brute_force(aabbs))
-        if message is None:
-            continue
-        bounds = options.get("bounds")
+    wrong = [(aabbs, options) for (aabbs, options), answer in zip(scenes, answers)
+             if compare_pairs(answer, pairs_brute_force(aabbs))[0] is not None]
+    if not wrong:
+        return Outcome.passed(f"{len(scenes)} scenes agree with brute force")
+    aabbs, options = wrong[0]
+    bounds = options.get("bounds")
+    message, missed, extra = compare_pairs(
+        student.call(MODULE, FUNCTION, aabbs, bounds, options.get("max_bodies_per_node", 2)), pairs_brute_force(aabbs))
 
-        def is_wrong(boxes):
-            boxes = np.array(boxes, dtype=float)
-            got = student.call(MODULE, FUNCTION, boxes, bounds, 1)
-            return compare_pairs(got, pairs_brute_force(boxes))[0] is not None
+    def is_wrong(boxes):
+        boxes = np.array(boxes, dtype=float)
+        got = student.call(MODULE, FUNCTION, boxes, bounds, 1)
+        return compare_pairs(got, pairs_brute_force(boxes))[0] is not None
 
-        small = smallest_failure(small_scenes, is_wrong)
-        if small is not None:
-            aabbs = np.array(small, dtype=float)
-            message, missed, extra = compare_pairs(student.call(MODULE, FUNCTION, aabbs, bounds, 1),
-                                                   pairs_brute_force(aabbs))
-        figure = pairs_figure(aabbs, missed, extra, 0.0, f"{FUNCTION}: {label}")
-        figure["bounds"] = bounds
-        return Outcome.failed(f"{label} ({len(aabbs)} boxes): {message}", figure)
-    return Outcome.passed(f"{len(scenes)} scenes agree with brute force")
+    small = smallest_failure(small_scenes, is_wrong)
+    if small is not None:
+        aabbs = np.array(small, dtype=float)
+        message, missed, extra = compare_pairs(student.call(MODULE, FUNCTION, aabbs, bounds, 1),
+                                               pairs_brute_force(aabbs))
+    figure = pairs_figure(aabbs, missed, extra, 0.0, f"{FUNCTION}: {label}")
+    figure["bounds"] = bounds
+    return Outcome.failed(f"{label}: {len(wrong)} of {len(scenes)} scenes wrong, e.g. ({len(aabbs)} boxes) {message}",
+                          figure, fraction=1 - len(wrong) / len(scenes))
 
 
 @check("quadtree.random")

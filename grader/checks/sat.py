@@ -29,22 +29,25 @@ def compare_overlaps(student, module: str, function: str, pairs: list, label: st
     cases = [(a, b, definite_overlap(a, b)) for a, b in pairs]
     cases = [(a, b, want) for a, b, want in cases if want is not None]
     answers = student.call_many(module, function, [(a, b) for a, b, _ in cases])
-    for (a, b, want), got in zip(cases, answers):
-        message = boolean(f"{function}({a!r}, {b!r})", got, want)
-        if message is None:
-            continue
-        if strategy is not None:
-            def is_wrong(pair):
-                expected = definite_overlap(*pair)
-                return expected is not None and boolean("", student.call(module, function, *pair), expected) is not None
+    wrong = [(a, b, want, got) for (a, b, want), got in zip(cases, answers)
+             if boolean("", got, want) is not None]
+    if not wrong:
+        return Outcome.passed(f"{len(cases)} pairs agree with the reference")
+    a, b, want, got = wrong[0]
+    message = boolean(f"{function}({a!r}, {b!r})", got, want)
+    if strategy is not None:
+        def is_wrong(pair):
+            expected = definite_overlap(*pair)
+            return expected is not None and boolean("", student.call(module, function, *pair), expected) is not None
 
-            small = smallest_failure(strategy, is_wrong)
-            if small is not None:
-                a, b = small
-                want = definite_overlap(a, b)
-                message = boolean(f"{function}({a!r}, {b!r})", student.call(module, function, a, b), want)
-        return Outcome.failed(f"{label}: {message}", shapes_figure(a, b, f"{function}: {label}"))
-    return Outcome.passed(f"{len(cases)} pairs agree with the reference")
+        small = smallest_failure(strategy, is_wrong)
+        if small is not None:
+            a, b = small
+            want = definite_overlap(a, b)
+            message = boolean(f"{function}({a!r}, {b!r})", student.call(module, function, a, b), want)
+    right = len(cases) - len(wrong)
+    return Outcome.failed(f"{label}: {len(wrong)} of {len(cases)} pairs wrong, e.g. {message}",
+                          shapes_figure(a, b, f"{function}: {label}"), fraction=right / len(cases))
 
 
 @check("sat.project_vertices")

@@ -68,11 +68,14 @@ MATHJAX_PARTS = ("tex-mml-chtml.js", "input", "output/chtml", "ui", "a11y", "sre
 #: Chapter file names: two digits, an underscore, lower-case words joined by underscores.
 CHAPTER_NAME = re.compile(r"^\d\d_[a-z0-9]+(?:_[a-z0-9]+)*$")
 
-#: Kernel environment: inline PNG figures whatever MPLBACKEND the caller has, and no
-#: debugger warning about frozen modules on the kernel's stderr.
+#: Kernel environment: inline PNG figures whatever MPLBACKEND the caller has, no
+#: debugger warning about frozen modules on the kernel's stderr, and the exercise
+#: checks pointed at the reference engine, so the book shows a passing run (a student
+#: running a chapter checks their own exercises/ package).
 KERNEL_ENV = {
     "MPLBACKEND": "module://matplotlib_inline.backend_inline",
     "PYDEVD_DISABLE_FILE_VALIDATION": "1",
+    "GRADER_CHECK_PACKAGE": "solutions",
 }
 
 #: Cell metadata that execution adds and the .md cannot hold; ignored by ``check``.

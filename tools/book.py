@@ -340,6 +340,24 @@ def build(out: Path | None = None, verbose: bool = False, source: Path = BOOK) -
     return index
 
 
+def partial_book(names: list[str]) -> Path:
+    """A copy of the book in a temporary folder whose table of contents lists only the
+    chapters with these prefixes (and the conventions and glossary pages), so that an
+    author can run the strict build on one chapter while others are being written."""
+    chapters = chapter_sources(names)
+    target = Path(tempfile.mkdtemp(prefix="book-only-")) / "book"
+    shutil.copytree(BOOK, target, ignore=shutil.ignore_patterns("_build", "_vendor", "*.ipynb"))
+    vendor = BOOK / "_vendor"
+    if vendor.exists():
+        (target / "_vendor").symlink_to(vendor)
+    entries = "\n".join(f"      - file: chapters/{md.stem}" for md in chapters)
+    (target / "_toc.yml").write_text(
+        "format: jb-book\nroot: intro\nparts:\n  - caption: Start here\n    chapters:\n"
+        "      - file: conventions\n  - caption: Chapters\n    numbered: true\n    chapters:\n"
+        f"{entries}\n  - caption: Reference\n    chapters:\n      - file: glossary\n")
+    return target
+
+
 def nbval_command(names: list[str] | None = None, extra: list[str] | None = None) -> list[str]:
     """The pytest command of a strict nbval run on the chapters' ``.ipynb``."""
     notebooks = [str(md.with_suffix(".ipynb")) for md in chapter_sources(names)]
@@ -477,6 +495,8 @@ def main(argv: list[str] | None = None) -> int:
     p = commands.add_parser("build", help="strict clean build (-W -n --keep-going)")
     p.add_argument("--out", type=Path, help="output folder (default: book/); HTML in OUT/_build/html")
     p.add_argument("--verbose", action="store_true", help="show Sphinx's full log")
+    p.add_argument("--only", nargs="+", metavar="NN",
+                   help="build a temporary copy holding only these chapters (for an author's check)")
     p = commands.add_parser("nbval", help="strict nbval on the chapters' .ipynb")
     p.add_argument("names", nargs="*", help="chapter prefixes, e.g. 01 (default: all)")
     p = commands.add_parser("screenshot", help="headless Chromium screenshot of a built page")
@@ -500,7 +520,10 @@ def main(argv: list[str] | None = None) -> int:
                 return 1
             log(f"{len(chapter_sources())} chapters: every .ipynb matches its .md and is executed")
         elif args.command == "build":
-            build(args.out, args.verbose)
+            if args.only:
+                build(args.out, args.verbose, source=partial_book(args.only))
+            else:
+                build(args.out, args.verbose)
         elif args.command == "nbval":
             return nbval(args.names).returncode
         elif args.command == "screenshot":

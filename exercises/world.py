@@ -8,6 +8,7 @@
         broad phase               candidate pairs (i, j), i < j, never static-static
         narrow phase              manifolds (i, j, Contact), normal from body i to body j
         resolve                   sequential impulses on velocities (solver settings)
+        solve joints              sequential impulses on the distance joints
         sweep bullets             continuous detection: fast bodies stop at first contact
         integrate positions       x += h v, angle += h w
         correct positions         linear projection / split impulse, if the solver uses it
@@ -32,6 +33,7 @@ from .broadphase.sorted_grid_numpy import pairs_grid_numpy
 from .broadphase.uniform_grid import pairs_uniform_grid, suggest_cell_size
 from .continuous import swept_aabb, time_of_impact
 from .contact import Contact
+from .joints import DistanceJoint, JointSolver
 from .narrowphase.dispatch import collide
 from .response.contact_solver import ContactSolver, SolverSettings
 from .shapes import Shape, bounding_aabb
@@ -102,10 +104,19 @@ class World:
     True
     """
 
-    def __init__(self, bodies: list[Body], settings: WorldSettings | None = None):
+    def __init__(self, bodies: list[Body], settings: WorldSettings | None = None,
+                 joints: list[DistanceJoint] | None = None):
         self.bodies = list(bodies)
         self.settings = settings or WorldSettings()
+        self.joints = list(joints or [])
+        for joint in self.joints:
+            if not (0 <= joint.a < len(self.bodies) and 0 <= joint.b < len(self.bodies)):
+                raise ValueError(f"joint between bodies {joint.a} and {joint.b}: no such body")
+        # Bodies joined by a joint do not collide with each other (Box2D's collideConnected = false).
+        self._jointed = {(min(j.a, j.b), max(j.a, j.b)) for j in self.joints}
         self.solver = ContactSolver(self.settings.solver)
+        self.joint_solver = JointSolver(self.settings.solver.iterations, self.settings.solver.baumgarte,
+                                        self.settings.solver.warm_starting)
         self.time = 0.0
         self.manifolds: list[tuple[int, int, Contact]] = []
         self.stats = StepStats()
@@ -123,6 +134,7 @@ class World:
             pairs = self.broad_phase(shapes)
             self.manifolds = self.narrow_phase(shapes, pairs)
             self.solver.solve(self.bodies, self.manifolds, h)
+            self.joint_solver.solve(self.bodies, self.joints, h)
             displacements = self.sweep_bullets(shapes, h)
             self.integrate_positions(displacements, h)
             self.solver.finish_step(self.bodies, self.manifolds, h)
@@ -167,7 +179,7 @@ class World:
             else:
                 pairs = [tuple(p) for p in pairs_grid_numpy(aabbs).tolist()]
         static = [b.is_static for b in self.bodies]
-        kept = [(i, j) for i, j in pairs if not (static[i] and static[j])]
+        kept = [(i, j) for i, j in pairs if not (static[i] and static[j]) and (i, j) not in self._jointed]
         self.stats = StepStats(candidate_pairs=len(kept))
         return kept
 

@@ -23,6 +23,8 @@ from typing import Callable
 import numpy as np
 
 from .body import Body
+from .joints import DistanceJoint
+from .shapes import polygon_centroid
 from .response.contact_solver import SolverSettings
 from .world import World, WorldSettings
 
@@ -43,6 +45,7 @@ class Scene:
     needs_friction: bool = True
     needs_continuous: bool = False
     solver: SolverSettings = field(default_factory=SolverSettings)
+    make_joints: Callable[[], list[DistanceJoint]] | None = None
 
     def world_settings(self, **solver_overrides) -> WorldSettings:
         """World switches for this scene: only what it needs, then ``solver_overrides``."""
@@ -52,7 +55,8 @@ class Scene:
 
     def build_world(self, settings: WorldSettings | None = None, **solver_overrides) -> World:
         """A new :class:`World` of this scene's bodies."""
-        return World(self.make_bodies(), settings or self.world_settings(**solver_overrides))
+        joints = self.make_joints() if self.make_joints else None
+        return World(self.make_bodies(), settings or self.world_settings(**solver_overrides), joints)
 
     @property
     def steps(self) -> int:
@@ -155,6 +159,58 @@ def many_bodies(count: int = 400, clustered: bool = False, seed: int = 1) -> lis
                     for r, p, v in zip(radii, positions, velocities)]
 
 
+def arch(blocks: int = 9, inner: float = 2.0, outer: float = 2.6) -> list[Body]:
+    """A semicircular arch of ``blocks`` wedge-shaped voussoirs (convex quadrilaterals)
+    between radii ``inner`` and ``outer`` (m), standing on the ground; friction 0.8 each."""
+    bodies = [ground(friction=0.8)]
+    for k in range(blocks):
+        a0, a1 = math.pi * k / blocks, math.pi * (k + 1) / blocks
+        corners = [(outer * math.cos(a0), outer * math.sin(a0)), (outer * math.cos(a1), outer * math.sin(a1)),
+                   (inner * math.cos(a1), inner * math.sin(a1)), (inner * math.cos(a0), inner * math.sin(a0))]
+        corners = np.array(corners)
+        # Body.polygon recentres the shape on its area centroid: the body goes there.
+        bodies.append(Body.polygon(corners, mass=1.0, friction=0.8, position=polygon_centroid(corners),
+                                   name=f"voussoir {k}"))
+    return bodies
+
+
+def overlap_recovery(count: int = 12, seed: int = 3) -> list[Body]:
+    """``count`` 1 m boxes spawned overlapping each other by up to half their size."""
+    rng = np.random.default_rng(seed)
+    bodies = [ground()]
+    for k in range(count):
+        x = float(rng.uniform(-1.0, 1.0))
+        y = 0.5 + 0.5 * k + float(rng.uniform(0.0, 0.1))
+        bodies.append(Body.box(1.0, 1.0, mass=1.0, position=(x, y), angle=float(rng.uniform(-0.3, 0.3)),
+                               friction=0.6, name=f"box {k}"))
+    return bodies
+
+
+def chain_links(links: int = 40, spacing: float = 0.25, anchor=(0.0, 12.0)) -> list[Body]:
+    """A static anchor and ``links`` small balls in a horizontal row, ``spacing`` apart."""
+    pin = Body.circle(0.05, is_static=True, position=anchor, name="anchor")
+    return [pin] + [Body.circle(0.05, mass=0.1, position=(anchor[0] + spacing * (k + 1), anchor[1]), name=f"link {k}")
+                    for k in range(links)]
+
+
+def chain_joints(links: int = 40, spacing: float = 0.25) -> list[DistanceJoint]:
+    """Rigid distance joints between consecutive links (and the anchor and the first)."""
+    return [DistanceJoint(k, k + 1, length=spacing) for k in range(links)]
+
+
+def friction_ramp(angle_deg: float = 30.0, frictions=(0.2, 0.4, 0.5, 0.7, 0.9)) -> list[Body]:
+    """Boxes on a ramp of ``angle_deg``; the ramp's friction is 1, so each pair's
+    friction is the box's.  tan 30 deg = 0.577: the first three slide, the others stick."""
+    a = math.radians(angle_deg)
+    ramp = Body.box(30.0, 1.0, is_static=True, angle=a, friction=1.0, name="ramp")
+    along = np.array([math.cos(a), math.sin(a)])
+    normal = np.array([-math.sin(a), math.cos(a)])
+    boxes = [Body.box(0.8, 0.8, mass=1.0, angle=a, friction=mu, name=f"box mu={mu}",
+                      position=(2.5 * k - 5.0) * along + (0.5 + 0.4) * normal)
+             for k, mu in enumerate(frictions)]
+    return [ramp] + boxes
+
+
 ZERO_G = (0.0, 0.0)
 #: The worked examples check velocities exactly: split impulses fix the overlap of the
 #: impact step without adding the Baumgarte bias to the real velocities.
@@ -173,6 +229,13 @@ SCENES: dict[str, Scene] = {scene.name: scene for scene in [
     Scene("pyramid_20", pyramid.__doc__, lambda: pyramid(20)),
     Scene("mass_ratio_100", mass_ratio.__doc__, lambda: mass_ratio(100)),
     Scene("mass_ratio_1000", mass_ratio.__doc__, lambda: mass_ratio(1000)),
+    Scene("arch", arch.__doc__, arch),
+    Scene("overlap_recovery", overlap_recovery.__doc__, overlap_recovery, duration=3.0),
+    Scene("pyramid_20_far", "The 20-base pyramid at (1e5, -8e4) m: same physics far from the origin.",
+          lambda: pyramid(20, origin=(1e5, -8e4))),
+    Scene("chain_40", "A chain of 40 balls on rigid distance joints, released horizontally from a static anchor.",
+          chain_links, duration=5.0, needs_rotation=False, needs_friction=False, make_joints=chain_joints),
+    Scene("friction_ramp", friction_ramp.__doc__, friction_ramp, duration=3.0),
     Scene("bullet_wall", bullet_wall.__doc__, bullet_wall, duration=0.2, gravity=ZERO_G,
           needs_rotation=False, needs_friction=False, needs_continuous=True),
     Scene("many_uniform", many_bodies.__doc__, lambda: many_bodies(400, clustered=False), duration=2.0,

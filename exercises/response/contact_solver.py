@@ -244,6 +244,7 @@ class ContactSolver:
 
         >>> ContactSolver().reset()
         """
+        self._impulses_by_feature: dict[tuple, tuple] = {}
         self._impulses_by_pair: dict[tuple[int, int], list[tuple]] = {}
         self._previous_dt: float | None = None
         self._pseudo_velocities: dict[int, tuple[float, float, float]] = {}
@@ -443,39 +444,42 @@ class ContactSolver:
         """Fill in the impulses remembered for each point (0 where nothing matches).
 
         A point takes the old point of the same pair with the same feature id; failing
-        that (no id, or an id that is new: the narrow phase swapped reference faces or
-        clipped a different vertex) the nearest old point not yet taken, if it is within
-        ``warm_start_match_distance``.
+        that (no id, or an id that is new: the narrow phase swapped the reference face
+        or clipped a different vertex) the nearest old point of the pair not taken by
+        another point, if it is within ``warm_start_match_distance``.
         """
-        import os
-        fallback = not os.environ.get("NOFALLBACK")
+        found = [self._impulses_by_feature.get(key) if key[1] is not None else None for key in point_keys]
         first = 0
         for _, _, contact in manifolds:
             count = len(contact.points)
-            unmatched = list(self._impulses_by_pair.get(point_keys[first][0], ())) if count else []
-            pending = []
-            for k in range(first, first + count):
-                feature = point_keys[k][1]
-                same = [n for n, old in enumerate(unmatched) if feature is not None and old[0] == feature]
-                if same:
-                    normal_total[k], tangent_total[k] = unmatched.pop(same[0])[3:]
-                elif feature is None or fallback:
-                    pending.append(k)
-            for k in pending:
-                if not unmatched:
-                    break
-                px, py = contact.points[k - first].tolist()
-                distances = [math.hypot(ox - px, oy - py) for _, ox, oy, _, _ in unmatched]
-                nearest = int(np.argmin(distances))
-                if distances[nearest] <= self.settings.warm_start_match_distance:
-                    normal_total[k], tangent_total[k] = unmatched.pop(nearest)[3:]
+            missing = [k for k in range(first, first + count) if found[k] is None]
+            old_points = self._impulses_by_pair.get(point_keys[first][0]) if missing else None
+            if old_points:
+                taken = {found[k][0] for k in range(first, first + count) if found[k] is not None}
+                unmatched = [old for old in old_points if old[0] not in taken]
+                for k in missing:
+                    if not unmatched:
+                        break
+                    px, py = contact.points[k - first].tolist()
+                    distances = [math.hypot(ox - px, oy - py) for _, ox, oy, _, _ in unmatched]
+                    nearest = int(np.argmin(distances))
+                    if distances[nearest] <= self.settings.warm_start_match_distance:
+                        found[k] = unmatched.pop(nearest)
             first += count
+        for k, old in enumerate(found):
+            if old is not None:
+                normal_total[k], tangent_total[k] = old[3], old[4]
 
     def _remember_impulses(self, point_keys, point, normal_total, tangent_total) -> None:
+        """Store each point as ``(key, x, y, normal impulse, tangent impulse)``, by
+        ``(pair, feature id)`` and in a list per pair."""
+        self._impulses_by_feature = {}
         self._impulses_by_pair = {}
-        for (pair, feature), (px, py), pn, pt in zip(point_keys, point.tolist(),
-                                                     normal_total.tolist(), tangent_total.tolist()):
-            self._impulses_by_pair.setdefault(pair, []).append((feature, px, py, pn, pt))
+        for key, (px, py), pn, pt in zip(point_keys, point.tolist(), normal_total.tolist(), tangent_total.tolist()):
+            entry = (key, px, py, pn, pt)
+            if key[1] is not None:
+                self._impulses_by_feature[key] = entry
+            self._impulses_by_pair.setdefault(key[0], []).append(entry)
 
     def correct_positions(self, bodies: list[Body], manifolds: list[tuple[int, int, Contact]]) -> None:
         """Linear projection (``position_correction="projection"``), after integration.
@@ -844,91 +848,109 @@ def sweep_loop(velocity: np.ndarray, rows: SweepRows, iterations: int, accumulat
     [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
     """
     vx, vy, w = velocity.T.tolist()
-    points = list(zip(*(getattr(rows, name).tolist() for name in SweepRows.POINT_FIELDS)))
-    manifolds = list(zip(rows.first.tolist(), rows.count.tolist(), rows.block.tolist(),
-                         rows.k11.tolist(), rows.k12.tolist(), rows.k22.tolist()))
+    columns = {name: getattr(rows, name).tolist() for name in SweepRows.POINT_FIELDS}
     normal_list, tangent_list = normal_total.tolist(), tangent_total.tolist()
-    normal_change_list = [0.0] * len(points)  # this sweep's normal increment (bound without accumulation)
-
-    def push(a, b, ima, imb, iia, iib, impulse_x, impulse_y, torque_a, torque_b):
-        """Impulse (impulse_x, impulse_y) on B, its opposite on A; torque_* = r x impulse."""
-        vx[a] -= ima * impulse_x
-        vy[a] -= ima * impulse_y
-        w[a] -= iia * torque_a
-        vx[b] += imb * impulse_x
-        vy[b] += imb * impulse_y
-        w[b] += iib * torque_b
-
-    def normal_velocity(k):
-        a, b, nx, ny, rn_a, rn_b = points[k][:6]
-        # v_n = (v_B + w_B x r_B - v_A - w_A x r_A) . n
-        return (vx[b] - vx[a]) * nx + (vy[b] - vy[a]) * ny + w[b] * rn_b - w[a] * rn_a
-
-    def solve_normal(k):
-        a, b, nx, ny, rn_a, rn_b, _, _, ima, imb, iia, iib, mass_normal, _, wanted, _ = points[k]
-        change = mass_normal * (wanted - normal_velocity(k))
-        if accumulate:
-            old = normal_list[k]
-            normal_list[k] = max(old + change, 0.0)
-            change = normal_list[k] - old
-        else:
-            change = max(change, 0.0)
-            normal_list[k] += change
-        normal_change_list[k] = change
-        push(a, b, ima, imb, iia, iib, change * nx, change * ny, rn_a * change, rn_b * change)
-
-    def solve_block(k, k11, k12, k22):
-        """Points k and k + 1 together; b = v - target - K x_old (Box2D's b')."""
-        a, b, nx, ny, rn_a1, rn_b1, _, _, ima, imb, iia, iib, _, _, wanted1, _ = points[k]
-        rn_a2, rn_b2, wanted2 = points[k + 1][4], points[k + 1][5], points[k + 1][14]
-        old1, old2 = (normal_list[k], normal_list[k + 1]) if accumulate else (0.0, 0.0)
-        b1 = normal_velocity(k) - wanted1 - (k11 * old1 + k12 * old2)
-        b2 = normal_velocity(k + 1) - wanted2 - (k12 * old1 + k22 * old2)
-        x1, x2 = block_normal_impulses(k11, k12, k22, b1, b2)
-        if x1 != x1:  # nan: no case fits (rounding); keep the impulses
-            x1, x2 = old1, old2
-        change1, change2 = x1 - old1, x2 - old2
-        normal_list[k] += change1
-        normal_list[k + 1] += change2
-        normal_change_list[k], normal_change_list[k + 1] = change1, change2
-        change = change1 + change2
-        push(a, b, ima, imb, iia, iib, change * nx, change * ny,
-             rn_a1 * change1 + rn_a2 * change2, rn_b1 * change1 + rn_b2 * change2)
-
-    def solve_friction(k):
-        a, b, nx, ny, _, _, rt_a, rt_b, ima, imb, iia, iib, _, mass_tangent, _, mu = points[k]
-        if mu == 0.0:
-            return
-        # Friction along t = (ny, -nx), Coulomb bound mu times the normal impulse.
-        tangent_velocity = (vx[b] - vx[a]) * ny - (vy[b] - vy[a]) * nx + w[b] * rt_b - w[a] * rt_a
-        change = -mass_tangent * tangent_velocity
-        if accumulate:
-            bound = mu * normal_list[k]
-            old = tangent_list[k]
-            tangent_list[k] = min(max(old + change, -bound), bound)
-            change = tangent_list[k] - old
-        else:
-            bound = mu * normal_change_list[k]
-            change = min(max(change, -bound), bound)
-            tangent_list[k] += change
-        push(a, b, ima, imb, iia, iib, change * ny, -change * nx, rt_a * change, rt_b * change)
-
+    normal_change = [0.0] * len(normal_list)  # this sweep's normal increments (friction bound without accumulation)
     # With accumulated impulses friction comes first, as in Box2D, bounded by the normal
-    # totals so far, and the normal impulses have the last word in every sweep.
+    # totals so far, so that the normal impulses have the last word in every sweep.
     # Clamped increments need this sweep's normal increment, so friction comes after.
     friction_first = accumulate
+    NORMAL, FRICTION, BLOCK = 0, 1, 2
+
+    # One row per manifold: its bodies, normal and inverse masses (shared by its points)
+    # and its program: (step, point index, rn_a, rn_b, rt_a, rt_b, 1/K_n, 1/K_t, target,
+    # mu), where step is NORMAL or FRICTION for one point, or BLOCK for the normal pair
+    # (then the row also carries the second point's index, rn_a, rn_b and target).
+    all_points = list(zip(range(len(normal_list)), *(columns[name] for name in (
+        "rn_a", "rn_b", "rt_a", "rt_b", "mass_normal", "mass_tangent", "target", "friction"))))
+    manifolds = []
+    for first, count, block, k11, k12, k22 in zip(rows.first.tolist(), rows.count.tolist(), rows.block.tolist(),
+                                                  rows.k11.tolist(), rows.k12.tolist(), rows.k22.tolist()):
+        points = all_points[first:first + count]
+        frictions = [(FRICTION, *point) for point in points if point[-1] != 0.0]
+        if block:
+            (k1, rn_a1, rn_b1, *_, wanted1, _), (k2, rn_a2, rn_b2, *_, wanted2, _) = points
+            normals = [(BLOCK, k1, rn_a1, rn_b1, wanted1, k2, rn_a2, rn_b2, wanted2, k11, k12, k22)]
+        else:
+            normals = [(NORMAL, *point) for point in points]
+        if friction_first:
+            program = frictions + normals
+        elif block:
+            program = normals + frictions
+        else:   # each point's normal, then its friction
+            program = [step for point in points
+                       for step in [(NORMAL, *point)] + [(FRICTION, *point)] * (point[-1] != 0.0)]
+        if program:
+            manifolds.append((columns["a"][first], columns["b"][first], columns["nx"][first], columns["ny"][first],
+                              columns["ima"][first], columns["imb"][first], columns["iia"][first],
+                              columns["iib"][first], program))
+
     for _ in range(iterations):
-        for first, count, block, k11, k12, k22 in manifolds:
-            if friction_first:
-                for k in range(first, first + count):
-                    solve_friction(k)
-            if block:
-                solve_block(first, k11, k12, k22)
-            for k in range(first, first + count):
-                if not block:
-                    solve_normal(k)
-                if not friction_first:
-                    solve_friction(k)
+        for a, b, nx, ny, ima, imb, iia, iib, program in manifolds:
+            # The two bodies' velocities stay in locals while the manifold is solved.
+            vxa, vya, wa, vxb, vyb, wb = vx[a], vy[a], w[a], vx[b], vy[b], w[b]
+            for step in program:
+                if step[0] == NORMAL:
+                    _, k, rn_a, rn_b, _, _, mass_normal, _, wanted, _ = step
+                    # v_n = (v_B + w_B x r_B - v_A - w_A x r_A) . n
+                    normal_velocity = (vxb - vxa) * nx + (vyb - vya) * ny + wb * rn_b - wa * rn_a
+                    change = mass_normal * (wanted - normal_velocity)
+                    if accumulate:
+                        old = normal_list[k]
+                        normal_list[k] = max(old + change, 0.0)
+                        change = normal_list[k] - old
+                    else:
+                        change = max(change, 0.0)
+                        normal_list[k] += change
+                    normal_change[k] = change
+                    vxa -= ima * change * nx
+                    vya -= ima * change * ny
+                    wa -= iia * rn_a * change
+                    vxb += imb * change * nx
+                    vyb += imb * change * ny
+                    wb += iib * rn_b * change
+                elif step[0] == FRICTION:
+                    _, k, _, _, rt_a, rt_b, _, mass_tangent, _, mu = step
+                    # Along t = (ny, -nx), Coulomb bound mu times the normal impulse.
+                    tangent_velocity = (vxb - vxa) * ny - (vyb - vya) * nx + wb * rt_b - wa * rt_a
+                    change = -mass_tangent * tangent_velocity
+                    if accumulate:
+                        bound = mu * normal_list[k]
+                        old = tangent_list[k]
+                        tangent_list[k] = min(max(old + change, -bound), bound)
+                        change = tangent_list[k] - old
+                    else:
+                        bound = mu * normal_change[k]
+                        change = min(max(change, -bound), bound)
+                        tangent_list[k] += change
+                    vxa -= ima * change * ny
+                    vya += ima * change * nx
+                    wa -= iia * rt_a * change
+                    vxb += imb * change * ny
+                    vyb -= imb * change * nx
+                    wb += iib * rt_b * change
+                else:
+                    # Both normal impulses at once (block_normal_impulses), b = v - target - K x_old.
+                    _, k1, rn_a1, rn_b1, wanted1, k2, rn_a2, rn_b2, wanted2, k11, k12, k22 = step
+                    along = (vxb - vxa) * nx + (vyb - vya) * ny
+                    old1, old2 = (normal_list[k1], normal_list[k2]) if accumulate else (0.0, 0.0)
+                    b1 = along + wb * rn_b1 - wa * rn_a1 - wanted1 - (k11 * old1 + k12 * old2)
+                    b2 = along + wb * rn_b2 - wa * rn_a2 - wanted2 - (k12 * old1 + k22 * old2)
+                    x1, x2 = block_normal_impulses(k11, k12, k22, b1, b2)
+                    if x1 != x1:  # nan: no case fits (rounding); keep the impulses
+                        x1, x2 = old1, old2
+                    change1, change2 = x1 - old1, x2 - old2
+                    normal_list[k1] += change1
+                    normal_list[k2] += change2
+                    normal_change[k1], normal_change[k2] = change1, change2
+                    change = change1 + change2
+                    vxa -= ima * change * nx
+                    vya -= ima * change * ny
+                    wa -= iia * (rn_a1 * change1 + rn_a2 * change2)
+                    vxb += imb * change * nx
+                    vyb += imb * change * ny
+                    wb += iib * (rn_b1 * change1 + rn_b2 * change2)
+            vx[a], vy[a], w[a], vx[b], vy[b], w[b] = vxa, vya, wa, vxb, vyb, wb
     normal_total[:] = normal_list
     tangent_total[:] = tangent_list
     return np.array([vx, vy, w], dtype=float).T.reshape(-1, 3)
@@ -959,115 +981,128 @@ def sweep_batched(velocity: np.ndarray, rows: SweepRows, iterations: int, accumu
     response_normal = jacobian_normal * inverse_masses
     response_tangent = jacobian_tangent * inverse_masses
 
-    def point_batch(points, normal, friction):
-        """Data of one batch of points (one per manifold of a colour)."""
-        return (points, np.concatenate([r.a[points], r.b[points]]), len(points), normal, friction,
-                jacobian_normal[:, points], response_normal[:, points],
-                jacobian_tangent[:, points], response_tangent[:, points],
-                r.mass_normal[points], r.mass_tangent[points], r.target[points], r.friction[points])
-
-    # Per batch, each manifold sees its impulses in the order of sweep_loop: with
-    # accumulated impulses the friction of all first points, then of all second points,
-    # then the block normal pairs and the other manifolds' first and second normals;
-    # without, the block pairs then their friction, and the other manifolds' first then
-    # second points (normal, then friction).  Manifolds of one batch share no movable
-    # body, so block and point-by-point manifolds do not interfere.
-    steps = []
-    friction_first = accumulate
+    # Each batch splits into up to three groups: block manifolds, other two-point
+    # manifolds, one-point manifolds.  A group's manifolds share no movable body, so
+    # its velocities are gathered once, updated by the same steps as each manifold in
+    # sweep_loop (one numpy operation doing that step for all of them) and scattered.
+    groups = []
     for start, stop in zip(r.bounds[:-1].tolist(), r.bounds[1:].tolist()):
         first, count, block = r.first[start:stop], r.count[start:stop], r.block[start:stop]
-        slots = [first[count > slot] + slot for slot in (0, 1)]
-        if friction_first:
-            for points in slots:
-                if np.any(r.friction[points] != 0.0):
-                    steps.append(("points", point_batch(points, False, True)))
-        if block.any():
-            p1 = first[block]
-            p2 = p1 + 1
-            steps.append(("block", (p1, p2, np.concatenate([r.a[p1], r.b[p1]]), len(p1),
-                                    jacobian_normal[:, p1], jacobian_normal[:, p2],
-                                    response_normal[:, p1], response_normal[:, p2],
-                                    r.target[p1], r.target[p2], r.k11[start:stop][block],
-                                    r.k12[start:stop][block], r.k22[start:stop][block])))
-            if not friction_first:
-                for points in (p1, p2):
-                    if np.any(r.friction[points] != 0.0):
-                        steps.append(("points", point_batch(points, False, True)))
-        for slot in (0, 1):
-            points = first[~block & (count > slot)] + slot
-            if len(points):
-                steps.append(("points", point_batch(points, True, not friction_first
-                                                    and bool(np.any(r.friction[points] != 0.0)))))
-
+        for members in (block, ~block & (count == 2), count == 1):
+            if members.any():
+                points = [first[members] + slot for slot in range(int(count[members][0]))]
+                groups.append(_BatchGroup(r, points, bool(block[members][0]), r.k11[start:stop][members],
+                                          r.k12[start:stop][members], r.k22[start:stop][members],
+                                          jacobian_normal, response_normal, jacobian_tangent, response_tangent,
+                                          normal_total, tangent_total))
     velocity = velocity.copy()
-    normal_change = np.zeros(len(normal_total))  # this sweep's normal increments (bound without accumulation)
     for _ in range(iterations):
-        for kind, data in steps:
-            if kind == "block":
-                _block_batch(velocity, data, accumulate, normal_total, normal_change)
-            else:
-                _point_batch(velocity, data, accumulate, normal_total, tangent_total, normal_change)
+        for group in groups:
+            group.solve(velocity, accumulate)
+    for group in groups:
+        group.write_totals(normal_total, tangent_total)
     return velocity
 
 
-def _point_batch(velocity, data, accumulate, normal_total, tangent_total, normal_change) -> None:
-    """Normal and/or friction impulses of a batch of points that share no movable body."""
-    (points, bodies_ab, size, do_normal, do_friction, j_normal, m_normal, j_tangent, m_tangent,
-     mass_n, mass_t, wanted, mu) = data
-    v = velocity[bodies_ab].reshape(2, size, 3)
-    if do_normal:
-        change = mass_n * (wanted - (v * j_normal).sum(axis=2).sum(axis=0))
-        total = normal_total[points]
+class _BatchGroup:
+    """Manifolds of one batch with the same number of points and the same normal solve.
+
+    Arrays per slot (first or second point of each manifold), shape (size,) or, for
+    Jacobians and responses, (2, size, 3) with axis 0 = body A, body B.
+    """
+
+    def __init__(self, r, points, block, k11, k12, k22, jacobian_normal, response_normal,
+                 jacobian_tangent, response_tangent, normal_total, tangent_total):
+        self.points = points
+        self.bodies = np.concatenate([r.a[points[0]], r.b[points[0]]])
+        self.size = len(points[0])
+        self.block = block
+        self.j_normal = [jacobian_normal[:, p] for p in points]
+        self.m_normal = [response_normal[:, p] for p in points]
+        self.j_tangent = [jacobian_tangent[:, p] for p in points]
+        self.m_tangent = [response_tangent[:, p] for p in points]
+        self.mass_normal = [r.mass_normal[p] for p in points]
+        self.mass_tangent = [r.mass_tangent[p] for p in points]
+        self.target = [r.target[p] for p in points]
+        self.mu = [r.friction[p] for p in points]
+        self.has_friction = [bool(np.any(mu != 0.0)) for mu in self.mu]
+        self.normal = [normal_total[p].copy() for p in points]       # accumulated impulses (N s)
+        self.tangent = [tangent_total[p].copy() for p in points]
+        self.normal_change = [np.zeros(self.size) for _ in points]   # this sweep's increments
+        if block:
+            self.k11, self.k12, self.k22 = k11, k12, k22
+            self.det = k11 * k22 - k12 * k12
+
+    def solve(self, velocity, accumulate) -> None:
+        """One sweep over the group's manifolds: ``velocity`` rows are updated in place."""
+        v = velocity[self.bodies].reshape(2, self.size, 3)
+        slots = range(len(self.points))
+        if accumulate:                      # friction first, as in sweep_loop
+            for s in slots:
+                self._friction(v, s, accumulate)
+        if self.block:
+            self._block(v, accumulate)
+        for s in slots:
+            if not self.block:
+                self._normal(v, s, accumulate)
+            if not accumulate:
+                self._friction(v, s, accumulate)
+        velocity[self.bodies] = v.reshape(-1, 3)
+
+    def _normal(self, v, s, accumulate) -> None:
+        change = self.mass_normal[s] * (self.target[s] - (v * self.j_normal[s]).sum(axis=(0, 2)))
+        total = self.normal[s]
         if accumulate:
             new = np.maximum(total + change, 0.0)
             change = new - total
+            total[:] = new
         else:
             np.maximum(change, 0.0, out=change)
-            new = total + change
-        normal_total[points] = new
-        normal_change[points] = change
-        v += m_normal * change[:, None]
-    if do_friction:
-        change = -mass_t * (v * j_tangent).sum(axis=2).sum(axis=0)
-        bound = mu * (normal_total[points] if accumulate else normal_change[points])
-        tangent = tangent_total[points]
+            total += change
+        self.normal_change[s] = change
+        v += self.m_normal[s] * change[:, None]
+
+    def _friction(self, v, s, accumulate) -> None:
+        if not self.has_friction[s]:
+            return
+        change = -self.mass_tangent[s] * (v * self.j_tangent[s]).sum(axis=(0, 2))
+        bound = self.mu[s] * (self.normal[s] if accumulate else self.normal_change[s])
+        tangent = self.tangent[s]
         if accumulate:
             new = np.clip(tangent + change, -bound, bound)
             change = new - tangent
+            tangent[:] = new
         else:
             change = np.clip(change, -bound, bound)
-            new = tangent + change
-        tangent_total[points] = new
-        v += m_tangent * change[:, None]
-    velocity[bodies_ab] = v.reshape(-1, 3)
+            tangent += change
+        v += self.m_tangent[s] * change[:, None]
 
+    def _block(self, v, accumulate) -> None:
+        """:func:`block_normal_impulses` for all manifolds of the group at once."""
+        k11, k12, k22, det = self.k11, self.k12, self.k22, self.det
+        old1, old2 = (self.normal[0], self.normal[1]) if accumulate else (0.0, 0.0)
+        b1 = (v * self.j_normal[0]).sum(axis=(0, 2)) - self.target[0] - (k11 * old1 + k12 * old2)
+        b2 = (v * self.j_normal[1]).sum(axis=(0, 2)) - self.target[1] - (k12 * old1 + k22 * old2)
+        # The four cases, the first that fits wins; none fits only by rounding: keep.
+        both1, both2 = (k12 * b2 - k22 * b1) / det, (k12 * b1 - k11 * b2) / det
+        only1, only2 = -b1 / k11, -b2 / k22
+        case_both = (both1 >= 0.0) & (both2 >= 0.0)
+        case_1 = ~case_both & (only1 >= 0.0) & (k12 * only1 + b2 >= 0.0)
+        case_2 = ~case_both & ~case_1 & (only2 >= 0.0) & (k12 * only2 + b1 >= 0.0)
+        case_none = (b1 >= 0.0) & (b2 >= 0.0)
+        stuck = ~(case_both | case_1 | case_2 | case_none)
+        x1 = np.where(case_both, both1, np.where(case_1, only1, np.where(stuck, old1, 0.0)))
+        x2 = np.where(case_both, both2, np.where(case_2, only2, np.where(stuck, old2, 0.0)))
+        change1, change2 = x1 - old1, x2 - old2
+        self.normal[0] += change1
+        self.normal[1] += change2
+        self.normal_change[0], self.normal_change[1] = change1, change2
+        v += self.m_normal[0] * change1[:, None] + self.m_normal[1] * change2[:, None]
 
-def _block_batch(velocity, data, accumulate, normal_total, normal_change) -> None:
-    """:func:`block_normal_impulses` for a batch of two-point manifolds sharing no movable body."""
-    (p1, p2, bodies_ab, size, j1, j2, m1, m2, wanted1, wanted2, k11, k12, k22) = data
-    v = velocity[bodies_ab].reshape(2, size, 3)
-    old1, old2 = (normal_total[p1], normal_total[p2]) if accumulate else (np.zeros(size), np.zeros(size))
-    b1 = (v * j1).sum(axis=2).sum(axis=0) - wanted1 - (k11 * old1 + k12 * old2)
-    b2 = (v * j2).sum(axis=2).sum(axis=0) - wanted2 - (k12 * old1 + k22 * old2)
-    # The four cases of block_normal_impulses, the first that fits wins.
-    det = k11 * k22 - k12 * k12
-    both1, both2 = (k12 * b2 - k22 * b1) / det, (k12 * b1 - k11 * b2) / det
-    only1, only2 = -b1 / k11, -b2 / k22
-    case_both = (both1 >= 0.0) & (both2 >= 0.0)
-    case_1 = ~case_both & (only1 >= 0.0) & (k12 * only1 + b2 >= 0.0)
-    case_2 = ~case_both & ~case_1 & (only2 >= 0.0) & (k12 * only2 + b1 >= 0.0)
-    case_none = ~case_both & ~case_1 & ~case_2 & (b1 >= 0.0) & (b2 >= 0.0)
-    stuck = ~(case_both | case_1 | case_2 | case_none)   # rounding: keep the impulses
-    x1 = np.where(case_both, both1, np.where(case_1, only1, 0.0))
-    x2 = np.where(case_both, both2, np.where(case_2, only2, 0.0))
-    x1 = np.where(stuck, old1, x1)
-    x2 = np.where(stuck, old2, x2)
-    change1, change2 = x1 - old1, x2 - old2
-    normal_total[p1] += change1
-    normal_total[p2] += change2
-    normal_change[p1], normal_change[p2] = change1, change2
-    v += m1 * change1[:, None] + m2 * change2[:, None]
-    velocity[bodies_ab] = v.reshape(-1, 3)
+    def write_totals(self, normal_total, tangent_total) -> None:
+        for p, normal, tangent in zip(self.points, self.normal, self.tangent):
+            normal_total[p] = normal
+            tangent_total[p] = tangent
 
 
 def pyramid_contacts(base: int = 20, size: float = 1.0, gap: float = 0.125,

@@ -213,10 +213,15 @@ def _points(value: float) -> str:
 
 
 def _shown_path(path: Path) -> str:
-    try:
-        return str(Path(path).resolve().relative_to(Path.cwd().resolve())) or "."
-    except ValueError:
-        return str(path)
+    """The path relative to the current folder, else to the repository, else absolute:
+    the same text on every machine for the repository's own packages."""
+    resolved = Path(path).resolve()
+    for base in (Path.cwd().resolve(), REPO_ROOT.resolve()):
+        try:
+            return str(resolved.relative_to(base)) or "."
+        except ValueError:
+            continue
+    return str(path)
 
 
 def student_message(row: CheckRow) -> str:

@@ -30,8 +30,10 @@ def pymunk_shape(body: Body, pm_body: pymunk.Body) -> pymunk.Shape:
 
 
 def build_space(bodies: list[Body], gravity=(0.0, -9.81), iterations: int = 10,
-                collision_slop: float = 0.005) -> tuple[pymunk.Space, list[pymunk.Body]]:
-    """A pymunk Space mirroring ``bodies``; returns it and the pymunk bodies in order."""
+                collision_slop: float = 0.005, joints=None) -> tuple[pymunk.Space, list[pymunk.Body]]:
+    """A pymunk Space mirroring ``bodies`` (and distance ``joints``: a PinJoint when
+    rigid, a DampedSpring of the same frequency and damping ratio otherwise); returns
+    it and the pymunk bodies in order.  Jointed bodies do not collide with each other."""
     space = pymunk.Space()
     space.gravity = tuple(gravity)
     space.iterations = iterations
@@ -52,7 +54,26 @@ def build_space(bodies: list[Body], gravity=(0.0, -9.81), iterations: int = 10,
         shape.friction = body.friction
         space.add(pm_body, shape)
         pm_bodies.append(pm_body)
+    for joint in joints or []:
+        space.add(pymunk_joint(joint, bodies, pm_bodies))
     return space, pm_bodies
+
+
+def pymunk_joint(joint, bodies: list[Body], pm_bodies: list[pymunk.Body]) -> pymunk.Constraint:
+    """The pymunk constraint of a reference :class:`~solutions.joints.DistanceJoint`."""
+    from solutions.joints import spring_coefficients
+
+    a, b = pm_bodies[joint.a], pm_bodies[joint.b]
+    if joint.frequency > 0:
+        inverse = sum(0.0 if bodies[k].is_static else 1.0 / bodies[k].mass for k in (joint.a, joint.b))
+        stiffness, damping = spring_coefficients(1.0 / inverse, joint.frequency, joint.damping_ratio)
+        constraint = pymunk.DampedSpring(a, b, tuple(joint.anchor_a), tuple(joint.anchor_b), joint.length,
+                                         stiffness, damping)
+    else:
+        constraint = pymunk.PinJoint(a, b, tuple(joint.anchor_a), tuple(joint.anchor_b))
+        constraint.distance = joint.length
+    constraint.collide_bodies = False
+    return constraint
 
 
 def copy_state(pm_bodies: list[pymunk.Body], bodies: list[Body]) -> None:

@@ -4,6 +4,7 @@
     grader grade SUBMISSIONS... --out DIR          instructors: a whole class
     grader gradescope-zip [--out FILE]             the same grading packaged for Gradescope
     grader example-class --out DIR                 write the bundled example class
+    grader similarity SUBMISSIONS... --out DIR     flag nearly identical code (pairs, and the reference)
     grader list                                    the tests, their points and visibility
 """
 from __future__ import annotations
@@ -20,6 +21,7 @@ SUBCOMMANDS = {
                        "build autograder.zip for Gradescope"),
     "example-class": ("grader.example_class", "add_example_class_arguments", "main_example_class",
                       "write the bundled example class of submissions"),
+    "similarity": ("grader.similarity", "add_similarity_arguments", "main_similarity", "flag nearly identical code"),
 }
 
 

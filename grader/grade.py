@@ -32,6 +32,13 @@ were being graded.  A submission that cannot be graded (a damaged or unsafe arch
 no ``exercises`` package) gets a results.json with 0 points saying why; a failure of
 the grader itself writes nothing, is reported, and is retried by the next run.
 Changing the checks' code does not change the spec hash: pass ``--regrade`` then.
+
+Every results.json written is also recorded as one line of ``DIR/grading_log.jsonl``
+(submission id, state, score, fingerprint, time), appended right after the file is in
+place: an audit of what each run graded (a submission appears once per grading).
+
+``--tests PATTERN[,PATTERN...]`` grades only the tests whose names match (shell-style
+patterns: ``momentum.*``); the spec hash then covers those tests only.
 """
 from __future__ import annotations
 
@@ -40,6 +47,7 @@ import contextlib
 import csv
 import dataclasses
 import fcntl
+import fnmatch
 import hashlib
 import importlib
 import io
@@ -68,6 +76,7 @@ from .submissions import (Submission, SubmissionPathError, SubmissionRefused, di
 HERE = Path(__file__).resolve().parent
 REPO_ROOT = HERE.parent
 GRADEBOOK_NAME = "gradebook.csv"
+LOG_NAME = "grading_log.jsonl"
 REPORT_NAME = "report.html"
 WORK_NAME = ".work"  # scratch folder of a run inside the output folder, removed after
 LOCK_NAME = ".grader.lock"
@@ -499,6 +508,7 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                         data = refused_results(tests, "the submission could not be read", 0.0, submission.id,
                                                submission_fingerprint, digest)
                         write_results(data, results_path)
+                        log_graded(out_dir, submission.id, "refused", data)
                         rows[submission.id] = _row(submission, "refused", data, out_dir, data["output"])
                         bar.update(1)
                         continue
@@ -556,9 +566,52 @@ def _finish(job: Job, elapsed: float, tests: list[TestSpec], digest: str, out_di
         data = build_results(results, elapsed, submission.id, job.fingerprint, digest, job.package)
         state = "graded"
     write_results(data, results_path)
+    log_graded(out_dir, submission.id, state, data)
     if html:
         write_student_report(results_path, warn)
     return _row(submission, state, data, out_dir, data["output"] if state == "refused" else "")
+
+
+def log_graded(out_dir: Path, submission_id: str, state: str, data: dict) -> None:
+    """Append one line to ``out_dir/grading_log.jsonl``: this submission was just graded.
+
+    One ``write`` of one line to a file opened for appending: lines of concurrent
+    writers never interleave, and a run killed before it leaves no partial line.
+    """
+    meta = data.get("extra_data") or {}
+    line = json.dumps({"submission": submission_id, "state": state, "score": data.get("score"),
+                       "fingerprint": meta.get("fingerprint"), "spec_hash": meta.get("spec_hash"),
+                       "at": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "pid": os.getpid()}) + "\n"
+    with contextlib.suppress(OSError):  # an audit line must never cost a grade
+        fd = os.open(out_dir / LOG_NAME, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_CLOEXEC, 0o644)
+        try:
+            os.write(fd, line.encode())
+        finally:
+            os.close(fd)
+
+
+def read_grading_log(out_dir: str | os.PathLike) -> list[dict]:
+    """The lines of ``out_dir/grading_log.jsonl`` (an empty list when there is none)."""
+    try:
+        text = (Path(out_dir) / LOG_NAME).read_text(encoding="utf-8")
+    except OSError:
+        return []
+    entries = []
+    for line in text.splitlines():
+        with contextlib.suppress(ValueError):
+            entries.append(json.loads(line))
+    return entries
+
+
+def select_tests(tests: list[TestSpec], patterns: str | None) -> list[TestSpec]:
+    """The tests whose names match one of the comma-separated shell-style ``patterns``."""
+    if not patterns:
+        return tests
+    wanted = [p.strip() for p in patterns.split(",") if p.strip()]
+    chosen = [t for t in tests if any(fnmatch.fnmatchcase(t.name, p) for p in wanted)]
+    if not chosen:
+        raise GradingError(f"--tests {patterns!r} matches no test (see `grader list`)")
+    return chosen
 
 
 def _run_jobs(todo: list[Job], started: list[Worker], config: dict, work: Path, per_test_seconds: float,
@@ -755,6 +808,8 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
                         metavar="SECONDS", help="wall-clock limit of one submission's tests (default %(default)g s)")
     parser.add_argument("--timeout-call", type=float, default=Limits.call_timeout, metavar="SECONDS",
                         help="wall-clock limit of one call into student code (default %(default)g s)")
+    parser.add_argument("--tests", default=None, metavar="PATTERNS",
+                        help="grade only the tests matching these comma-separated patterns, e.g. 'momentum.*,sat.*'")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--no-html", action="store_true", help="no HTML reports")
 
@@ -769,10 +824,12 @@ def main_grade(args: argparse.Namespace) -> int:
         return 2
     limits = dataclasses.replace(Limits(), call_timeout=args.timeout_call)
     try:
+        patterns = getattr(args, "tests", None)
+        tests = select_tests(load_spec(), patterns) if patterns else None
         rows = grade_submissions(args.submissions, args.out, jobs=args.jobs, regrade=args.regrade, limits=limits,
                                  isolation=args.isolation, per_submission_seconds=args.timeout_submission,
                                  per_test_seconds=args.timeout_test, progress=not args.no_progress,
-                                 html=not args.no_html)
+                                 html=not args.no_html, tests=tests)
     except (SubmissionPathError, GradingError, SpecError) as exc:
         print(f"grader grade: error: {exc}", file=sys.stderr)
         return 2

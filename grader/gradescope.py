@@ -23,12 +23,17 @@ requirements when ``setup.sh`` was not run there.
 On Gradescope the student code runs under bubblewrap, as an unprivileged user, when
 the container lets bubblewrap build a sandbox; otherwise it falls back to the plain
 isolation (resource limits only) and says so in the autograder's output, which only
-instructors see.
+instructors see.  Before grading, ``run`` (as root) makes ``ROOT/source`` -- the grader,
+the hidden tests and the reference solutions -- readable by root only, and
+``ROOT/results`` writable by root only, so that even the plain fallback, which drops
+student code to an unprivileged user when the venv's Python is usable by anyone, can
+neither read the solutions nor write a results.json.
 """
 from __future__ import annotations
 
 import argparse
 import os
+import stat
 import sys
 import tempfile
 import time
@@ -184,6 +189,34 @@ def autograder_root() -> Path:
     return Path(os.environ.get(ROOT_VARIABLE) or DEFAULT_ROOT)
 
 
+def protect_source(root: Path) -> bool:
+    """Make ``root/source`` readable by root only and ``root/results`` writable by root
+    only; True when done (the grader runs as root), False otherwise (nothing changed).
+
+    ``source`` itself becomes 0700 (nobody else can even look inside) and every file
+    and folder under it loses its group and other permissions, in case one is reached
+    another way (a hard link, a bind mount).  Symbolic links are left alone.
+    """
+    if os.geteuid() != 0:
+        return False
+    source = root / "source"
+    if source.is_dir() and not source.is_symlink():
+        for folder, dirs, files in os.walk(source):
+            for name in dirs + files:
+                path = os.path.join(folder, name)
+                info = os.lstat(path)
+                if not stat.S_ISLNK(info.st_mode):
+                    os.chmod(path, stat.S_IMODE(info.st_mode) & ~0o077)
+        os.chown(source, 0, 0)
+        os.chmod(source, 0o700)
+    results = root / "results"
+    results.mkdir(exist_ok=True)
+    if not results.is_symlink():
+        os.chown(results, 0, 0)
+        os.chmod(results, 0o755)
+    return True
+
+
 def run_autograder(root: str | os.PathLike | None = None, isolation: str = "auto",
                    per_submission_seconds: float | None = None) -> int:
     """Grade ``ROOT/submission`` and write ``ROOT/results/results.json``; the exit status.
@@ -201,6 +234,9 @@ def run_autograder(root: str | os.PathLike | None = None, isolation: str = "auto
     if not submission.is_dir():
         print(f"run_autograder: no submission folder at {submission}", flush=True)
         return 1
+    if not protect_source(root):
+        print("run_autograder: not running as root: the solutions and hidden tests in "
+              f"{root / 'source'} keep their permissions", flush=True)
     started = time.perf_counter()
     try:
         with tempfile.TemporaryDirectory(prefix="grading-") as out:

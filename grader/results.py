@@ -240,19 +240,30 @@ def refused_results(tests: list[TestSpec], reason: str, execution_time: float = 
 
 
 def write_results(data: dict, path: str | os.PathLike) -> Path:
-    """Write ``data`` as JSON to ``path`` atomically (temporary file, fsync, os.replace)."""
+    """Write ``data`` as JSON to ``path`` atomically (temporary file, fsync, os.replace).
+
+    Text that is not valid Unicode (a lone surrogate a student's code printed) is
+    written as a JSON escape, so that the file is always valid UTF-8.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     text = json.dumps(data, indent=1, allow_nan=False, ensure_ascii=False)
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        text = json.dumps(data, indent=1, allow_nan=False, ensure_ascii=True)
     write_text_atomic(path, text + "\n")
     return path
 
 
 def write_text_atomic(path: Path, text: str) -> None:
-    """Replace ``path`` by ``text`` in one step; a crash leaves the old file or the new one."""
+    """Replace ``path`` by ``text`` in one step; a crash leaves the old file or the new one.
+
+    Characters UTF-8 cannot hold (lone surrogates) are written as ``?``.
+    """
     handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
-        with os.fdopen(handle, "w", encoding="utf-8", newline="") as stream:
+        with os.fdopen(handle, "w", encoding="utf-8", errors="replace", newline="") as stream:
             stream.write(text)
             stream.flush()
             os.fsync(stream.fileno())

@@ -22,12 +22,25 @@ standard input, responses on a pipe whose descriptor is its first argument; its 
 (printed text is captured per call by the worker and returned, capped).  The parent
 measures elapsed time itself.  A crash, hang or exception costs that call only: the
 worker is restarted for the next one.
+
+The parent trusts nothing the worker sends: it takes the worker's process id from a
+first line written before any student code runs, accepts as an answer only a JSON line
+echoing the request's id and random nonce, ignores every other line, checks that the
+answer is well-formed plain data (:func:`grader.codec.plain_data`; lone surrogates
+become ``?``) and stops reading at ``RESPONSE_LIMIT`` bytes.
+
+Each sandbox holds an exclusive lock on its user id (a file lock under ``/run``), so
+that two graders on one machine (two batches, parallel test runs) never share a user:
+killing "every process of this user" then only ever hits this sandbox's processes.
 """
 from __future__ import annotations
 
+import fcntl
 import json
 import os
+import random
 import resource
+import secrets
 import selectors
 import shutil
 import signal
@@ -41,11 +54,21 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from . import codec
+
 HERE = Path(__file__).resolve().parent
 WORKER_FILES = ("worker.py", "codec.py", "scene_driver.py")
 SANDBOX_MOUNT = "/sandbox"
 #: First uid of the unprivileged users the workers run as (one per parallel slot).
 SANDBOX_UID_BASE = 61000
+#: Number of uids from SANDBOX_UID_BASE the sandboxes may take (when the uid of their
+#: slot is held by another grader on the machine, another free one is used).
+SANDBOX_UID_COUNT = 1000
+#: Folders (first usable one wins) for the uid locks: root-owned, not world-writable.
+UID_LOCK_PARENTS = ("/run", "/var/run", "/var/lib", "/tmp")
+UID_LOCK_FOLDER = "grader-sandbox-uids"
+#: Statuses a worker may answer with.
+WORKER_STATUSES = ("ok", "not_implemented", "import_error", "missing", "error", "unreadable")
 RESPONSE_LIMIT = 64 * 1024 * 1024  # bytes of one JSON response
 STDERR_KEPT = 8_000  # characters of the worker's stderr kept for messages
 
@@ -157,6 +180,98 @@ def copy_package(source: Path, destination: Path) -> None:
             shutil.copyfile(entry.path, target)
 
 
+def uid_lock_folder() -> Path | None:
+    """The folder of the uid lock files (created if needed), or None if none is safe.
+
+    Safe: a real folder (not a link) owned by root and writable by root only, so no
+    sandboxed user can plant or hold a lock.
+    """
+    for parent in UID_LOCK_PARENTS:
+        folder = Path(parent) / UID_LOCK_FOLDER
+        try:
+            if not os.path.isdir(parent):
+                continue
+            try:
+                os.mkdir(folder, 0o700)
+            except FileExistsError:
+                pass
+            info = os.lstat(folder)
+        except OSError:
+            continue
+        if stat.S_ISDIR(info.st_mode) and info.st_uid == 0 and not info.st_mode & 0o022:
+            return folder
+    return None
+
+
+def claim_uid(preferred: int) -> tuple[int, int | None]:
+    """``(uid, lock descriptor)``: ``preferred`` if no other sandbox holds it, else a free
+    uid of the range; the lock lasts until the descriptor is closed.
+
+    Without a safe lock folder: ``(preferred, None)`` (the uid is then shared with any
+    other grader running on this machine at the same time).
+    """
+    folder = uid_lock_folder()
+    if folder is None:
+        return preferred, None
+    # In random order: a uid another grader just gave back is rarely taken again at once.
+    others = [SANDBOX_UID_BASE + i for i in range(SANDBOX_UID_COUNT) if SANDBOX_UID_BASE + i != preferred]
+    random.shuffle(others)
+    for uid in [preferred, *others]:
+        try:
+            fd = os.open(folder / f"{uid}.lock", os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o600)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return uid, fd
+        except OSError:
+            os.close(fd)
+    raise RuntimeError(f"every sandbox user id from {SANDBOX_UID_BASE} to "
+                       f"{SANDBOX_UID_BASE + SANDBOX_UID_COUNT - 1} is in use")
+
+
+def uid_in_use(uid: int) -> bool:
+    """True while a sandbox (of any grader on this machine) holds ``uid``'s lock."""
+    folder = uid_lock_folder()
+    if folder is None:
+        return False
+    try:
+        fd = os.open(folder / f"{uid}.lock", os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        return False
+    except OSError:
+        return True
+    finally:
+        os.close(fd)
+
+
+def processes_of(uids) -> list[tuple[int, int]]:
+    """``(pid, uid)`` of the live (not zombie) processes whose real uid is in ``uids``."""
+    wanted = set(uids)
+    found = []
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/status") as handle:
+                fields = dict(line.split(":", 1) for line in handle if ":" in line)
+        except OSError:
+            continue
+        uid = int(fields.get("Uid", "-1").split()[0])
+        if uid in wanted and not fields.get("State", "").strip().startswith("Z"):
+            found.append((int(entry), uid))
+    return found
+
+
+def stray_processes() -> list[tuple[int, int]]:
+    """Processes of sandbox users that no sandbox holds: left behind (should be none)."""
+    uids = range(SANDBOX_UID_BASE, SANDBOX_UID_BASE + SANDBOX_UID_COUNT)
+    return [(pid, uid) for pid, uid in processes_of(uids) if not uid_in_use(uid)]
+
+
 class Sandbox:
     """A worker process running a student's ``exercises`` package.
 
@@ -178,17 +293,30 @@ class Sandbox:
         self.isolation = choose_isolation(isolation)
         # A user of its own: the process limit then counts this sandbox alone.
         can_switch = os.geteuid() == 0 and (self.isolation == "bwrap" or python_usable_by_anyone())
-        self.uid = SANDBOX_UID_BASE + slot if can_switch else None
+        self._uid_lock = None
+        self.uid = None
+        if can_switch:
+            self.uid, self._uid_lock = claim_uid(SANDBOX_UID_BASE + slot)
         self.workdir: Path | None = None
         self.process: subprocess.Popen | None = None
         self._responses = None
         self._stderr: list[str] = []
         self._next_id = 0
+        self._worker_pid: int | None = None
+        self._buffer = bytearray()
         self.restarts = 0
 
     # Life cycle -----------------------------------------------------------------
     def __enter__(self) -> "Sandbox":
         return self
+
+    def __del__(self) -> None:
+        lock = getattr(self, "_uid_lock", None)
+        if lock is not None:
+            try:
+                os.close(lock)
+            except OSError:
+                pass
 
     def __exit__(self, *exc) -> None:
         self.close()
@@ -267,7 +395,8 @@ class Sandbox:
             preexec_fn=self._limit_resources, start_new_session=True)
         os.close(write_end)
         self._response_fd = read_end
-        self._buffer = b""
+        self._buffer = bytearray()
+        self._worker_pid = None
         threading.Thread(target=self._drain_stderr, args=(self.process.stderr,), daemon=True).start()
 
     def _drain_stderr(self, stream) -> None:
@@ -289,6 +418,8 @@ class Sandbox:
             self.process.wait(timeout=10)
         except subprocess.TimeoutExpired:
             pass
+        # Whatever escaped the process group (setsid in plain mode) dies by its user.
+        self._reap_strays(None)
         for stream in (self.process.stdin, self.process.stderr):
             try:
                 stream.close()
@@ -301,35 +432,50 @@ class Sandbox:
         self.process = None
 
     def close(self) -> None:
-        """Kill the worker (and everything it started) and delete its folder."""
+        """Kill the worker (and everything it started), delete its folder, free its user."""
         self._kill()
         if self.workdir is not None:
             shutil.rmtree(self.workdir, ignore_errors=True)
             self.workdir = None
+        if self._uid_lock is not None:
+            os.close(self._uid_lock)
+            self._uid_lock = None
 
-    # Calls ------------------------------------------------------------------------
+    # Calls ------------------------------------------------------------------------------
     def call(self, module: str, function: str, args: list | tuple = (), kwargs: dict | None = None,
              timeout: float | None = None, repeat: int = 1, batch: bool = False) -> CallResult:
         """Call ``module.function(*args, **kwargs)`` in the worker (arguments already encoded).
 
         ``repeat`` calls it that many times (for timing); ``batch=True`` takes ``args``
         as a list of argument lists and returns the list of values.
+
+        The request carries a fresh random nonce; only a line echoing it (and the
+        request's id) is taken as the answer, every other line is skipped.  What this
+        protects: a line written earlier or later than the answer -- by a process or
+        thread the student's code left running, by code run at import time, or a
+        canned line -- is never taken for the answer to this request.  What it does not:
+        the student's code runs in the worker and can read the nonce from the worker's
+        memory and write an answer of its choosing; that answer is still only plain
+        data that this process checks (:func:`grader.codec.plain_data`) and compares
+        with values it computes itself, so it is worth no more than returning that
+        value.
         """
         if self.process is None or self.process.poll() is not None:
             if self.process is not None:
                 self.restarts += 1
             self.start()
         self._next_id += 1
-        request = {"id": self._next_id, "module": module, "function": function, "args": list(args),
-                   "kwargs": kwargs or {}, "repeat": repeat, "batch": batch}
+        nonce = secrets.token_hex(16)
+        request = {"id": self._next_id, "nonce": nonce, "module": module, "function": function,
+                   "args": list(args), "kwargs": kwargs or {}, "repeat": repeat, "batch": batch}
+        self._discard_stale_output()
         started = time.perf_counter()
+        deadline = started + (timeout if timeout is not None else self.limits.call_timeout)
         try:
-            self.process.stdin.write((json.dumps(request, allow_nan=True) + "\n").encode())
-            self.process.stdin.flush()
+            sent = self._send((json.dumps(request, allow_nan=True) + "\n").encode(), deadline)
         except (BrokenPipeError, OSError):
             return self._crashed(started)
-        deadline = started + (timeout if timeout is not None else self.limits.call_timeout)
-        outcome, line = self._read_line(deadline)
+        outcome, data = self._read_answer(self._next_id, nonce, deadline) if sent else ("timeout", None)
         elapsed = time.perf_counter() - started
         if outcome == "timeout":
             self._kill()
@@ -338,47 +484,127 @@ class Sandbox:
         if outcome == "eof":
             return self._crashed(started)
         if outcome == "too_large":
-            return CallResult("unreadable", message="the worker's answer was larger than the grader accepts",
-                              elapsed=elapsed)
+            return CallResult("unreadable", message="the worker's answer was larger than the grader accepts "
+                              f"({RESPONSE_LIMIT // 1024**2} MiB)", elapsed=elapsed)
         try:
-            data = json.loads(line)
-        except ValueError:
+            answer = self._checked(data)
+        except (codec.NotPlainData, RecursionError) as exc:
             self._kill()
-            return CallResult("unreadable", message="the worker's answer was not valid JSON", elapsed=elapsed)
-        if data.get("id") != self._next_id:
-            self._kill()
-            return CallResult("unreadable", message="the worker answered out of turn", elapsed=elapsed)
-        self._reap_strays(data.get("pid"))
-        return CallResult(str(data.get("status")), data.get("value"), str(data.get("message", "")),
-                          str(data.get("output", "")), elapsed, data.get("args_after") or [])
+            return CallResult("unreadable", message=f"the worker's answer was not well-formed: {exc}",
+                              elapsed=elapsed)
+        self._reap_strays(self._worker_pid)
+        return CallResult(answer["status"], answer["value"], answer["message"], answer["output"], elapsed,
+                          answer["args_after"])
 
-    def _read_line(self, deadline: float) -> tuple[str, bytes]:
-        """``("line", bytes)``, or ``("timeout" | "eof" | "too_large", b"")``."""
-        while b"\n" not in self._buffer:
-            remaining = deadline - time.perf_counter()
-            if remaining <= 0:
-                return "timeout", b""
-            with selectors.DefaultSelector() as selector:
-                selector.register(self._response_fd, selectors.EVENT_READ)
+    def _discard_stale_output(self) -> None:
+        """Drop what the worker's channel holds before a request is sent: none of it can be
+        the answer to that request (a stray writer's leftovers, a partial line that would
+        otherwise be glued to the next answer).  The hello line of a fresh worker is kept."""
+        if self._worker_pid is None:
+            return
+        self._buffer = bytearray()
+        dropped = 0
+        with selectors.DefaultSelector() as selector:
+            selector.register(self._response_fd, selectors.EVENT_READ)
+            while dropped < RESPONSE_LIMIT and selector.select(timeout=0):
+                chunk = os.read(self._response_fd, 1 << 20)
+                if not chunk:
+                    return
+                dropped += len(chunk)
+
+    def _send(self, data: bytes, deadline: float) -> bool:
+        """Write a request to the worker's standard input; False if the deadline passes
+        first (a worker that stops reading its input cannot block the grader)."""
+        fd = self.process.stdin.fileno()
+        os.set_blocking(fd, False)
+        view = memoryview(data)
+        with selectors.DefaultSelector() as selector:
+            selector.register(fd, selectors.EVENT_WRITE)
+            while view:
+                remaining = deadline - time.perf_counter()
+                if remaining <= 0:
+                    return False
                 if not selector.select(timeout=min(remaining, 0.5)):
                     continue
-            chunk = os.read(self._response_fd, 1 << 20)
-            if not chunk:  # every writer closed: the worker is gone
-                return "eof", b""
-            self._buffer += chunk
-            if len(self._buffer) > RESPONSE_LIMIT:
-                self._kill()
-                self._buffer = b""
-                return "too_large", b""
-        line, _, self._buffer = self._buffer.partition(b"\n")
-        return "line", line
+                try:
+                    view = view[os.write(fd, view):]
+                except BlockingIOError:
+                    continue
+        return True
 
-    def _reap_strays(self, worker_pid) -> None:
-        """Kill every process of this sandbox's user but the worker itself.
+    @staticmethod
+    def _checked(data: dict) -> dict:
+        """The answer's fields, checked and cleaned; NotPlainData if it is malformed."""
+        status = data.get("status")
+        if status not in WORKER_STATUSES:
+            raise codec.NotPlainData(f"unknown status {str(status)[:40]!r}")
+        texts = {}
+        for name in ("message", "output"):
+            text = data.get(name, "")
+            if type(text) is not str:
+                raise codec.NotPlainData(f"{name} is not a text")
+            texts[name] = codec.clean_text(text)
+        after = data.get("args_after") or []
+        if type(after) is not list or any(a is not None and type(a) is not dict for a in after):
+            raise codec.NotPlainData("args_after is not a list of bodies")
+        return {"status": status, "value": codec.plain_data(data.get("value")), **texts,
+                "args_after": codec.plain_data(after)}
+
+    def _read_answer(self, number: int, nonce: str, deadline: float) -> tuple[str, dict | None]:
+        """``("answer", data)``, or ``("timeout" | "eof" | "too_large", None)``.
+
+        The first line of a fresh worker is its hello (process id); after that, lines
+        that are not a JSON object with this request's id and nonce are skipped.
+        Bytes received during one call are capped at RESPONSE_LIMIT.
+        """
+        received = 0
+        scanned = 0
+        while True:
+            newline = self._buffer.find(b"\n", scanned)
+            if newline < 0:
+                scanned = len(self._buffer)
+                remaining = deadline - time.perf_counter()
+                if remaining <= 0:
+                    return "timeout", None
+                with selectors.DefaultSelector() as selector:
+                    selector.register(self._response_fd, selectors.EVENT_READ)
+                    if not selector.select(timeout=min(remaining, 0.5)):
+                        continue
+                chunk = os.read(self._response_fd, 1 << 20)
+                if not chunk:  # every writer closed: the worker is gone
+                    return "eof", None
+                received += len(chunk)
+                if received > RESPONSE_LIMIT:
+                    self._kill()
+                    self._buffer = bytearray()
+                    return "too_large", None
+                self._buffer += chunk
+                continue
+            line = bytes(self._buffer[:newline])
+            del self._buffer[:newline + 1]
+            scanned = 0
+            try:
+                data = json.loads(line)
+            except (ValueError, RecursionError):
+                continue
+            if type(data) is not dict:
+                continue
+            if self._worker_pid is None:
+                if data.get("hello") is True and type(data.get("pid")) is int:
+                    self._worker_pid = data["pid"]
+                continue
+            if data.get("id") == number and data.get("nonce") == nonce:
+                return "answer", data
+
+    def _reap_strays(self, worker_pid: int | None) -> None:
+        """Kill every process of this sandbox's user but the worker itself (all of them
+        when ``worker_pid`` is None).
 
         Runs after each call, so nothing the student's code started (a background
-        process, the children of a fork bomb) outlives the call that started it.
-        Only with bubblewrap, where the user is this sandbox's alone.
+        process, the children of a fork bomb) outlives the call that started it, and
+        after the worker is killed.  Only when the sandbox has a user of its own (held
+        by its uid lock); ``worker_pid`` is the worker's pid in its own process
+        namespace, taken from its hello line.
         """
         if self.uid is None:
             return
@@ -393,7 +619,7 @@ class Sandbox:
                 continue
             if int(fields.get("Uid", "-1").split()[0]) != self.uid:
                 continue
-            if fields.get("NSpid", "").split()[-1:] == [str(worker_pid)]:
+            if worker_pid is not None and fields.get("NSpid", "").split()[-1:] == [str(worker_pid)]:
                 continue
             try:
                 os.kill(int(entry), signal.SIGKILL)
@@ -408,13 +634,21 @@ class Sandbox:
 
     def _crashed(self, started: float) -> CallResult:
         process = self.process
-        code = process.wait(timeout=10) if process is not None else None
+        try:
+            code = process.wait(timeout=2) if process is not None else None
+        except subprocess.TimeoutExpired:  # alive, but it closed its answer channel
+            code = None
         stderr = "".join(self._stderr).strip()
         self._kill()
         if code is not None and code > 128 and self.isolation == "bwrap":
             code = -(code - 128)  # bwrap's init reports a signal death as 128 + signal
-        if code is not None and code < 0:
-            name = signal.Signals(-code).name
+        if code is None:
+            why = "the worker stopped answering (it closed its answer channel) and was stopped"
+        elif code < 0:
+            try:
+                name = signal.Signals(-code).name
+            except ValueError:
+                name = f"signal {-code}"
             why = {"SIGXCPU": "CPU time limit reached", "SIGSEGV": "segmentation fault",
                    "SIGKILL": "killed (memory or process limit, or a kill)", "SIGXFSZ": "file size limit reached",
                    }.get(name, name)

@@ -38,6 +38,26 @@ def encode(value: Any) -> Any:
     return codec.encode_value(value)
 
 
+#: Characters of printed output quoted in a failed test's message.
+OUTPUT_SHOWN = 2000
+
+
+def shown_output(output: str, limit: int = OUTPUT_SHOWN) -> str:
+    """The start of what the student's code printed, saying how much was left out.
+
+    The worker already keeps only the start of a long output and ends it with
+    ``[... N more characters not shown]``; that count is added to what is cut here.
+    """
+    if len(output) <= limit:
+        return output
+    dropped = 0
+    head, marker, tail = output.rpartition("\n[... ")
+    if marker and tail.endswith(" more characters not shown]") and tail.split(" ", 1)[0].isdigit():
+        output, dropped = head, int(tail.split(" ", 1)[0])
+    dropped += max(0, len(output) - limit)
+    return output[:limit] + f"\n[... {dropped} more characters not shown]"
+
+
 class StudentCode:
     """The student's ``exercises`` package, reached through a sandboxed worker.
 
@@ -66,13 +86,19 @@ class StudentCode:
         result = self.raw(module, function, cases, timeout=timeout, batch=True)
         values = self.value_of(result, f"{module}.{function}")
         if not isinstance(values, list) or len(values) != len(cases):
-            raise StudentCallFailed(Outcome("error", message="the worker returned the wrong number of results"))
+            got = f"{len(values)} results" if isinstance(values, list) else "no list of results"
+            raise StudentCallFailed(Outcome("error", message=f"{module}.{function}: the worker returned {got} "
+                                                             f"for {len(cases)} calls"))
         return values
 
     def call_with_state(self, module: str, function: str, *args, timeout: float | None = None) -> tuple[Any, list]:
         """The returned value and the arguments after the call (bodies changed in place)."""
         result = self.raw(module, function, *args, timeout=timeout)
-        return self.value_of(result, f"{module}.{function}"), result.args_after
+        value = self.value_of(result, f"{module}.{function}")
+        if len(result.args_after) != len(args):
+            raise StudentCallFailed(Outcome("error", message=f"{module}.{function}: the worker did not send back "
+                                                             "the state of the arguments after the call"))
+        return value, result.args_after
 
     @staticmethod
     def value_of(result: CallResult, name: str) -> Any:
@@ -81,5 +107,5 @@ class StudentCode:
         status, words = STATUS_WORDS.get(result.status, ("error", result.status))
         detail = "" if result.status == "not_implemented" else f"\n{result.message}".rstrip()
         if result.output:
-            detail += f"\nyour code printed:\n{result.output[:2000]}"
+            detail += f"\nyour code printed:\n{shown_output(result.output)}"
         raise StudentCallFailed(Outcome(status, message=f"{name}: {words}{detail}"))

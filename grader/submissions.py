@@ -47,7 +47,7 @@ MAX_TOTAL_BYTES = 64 * 1024**2
 #: Longest submission id (characters).
 MAX_ID_LENGTH = 80
 #: Names an id may not take: files the grader writes next to the submission folders.
-RESERVED_IDS = frozenset({"gradebook.csv", "index.html", "report.html", "class_report.html"})
+RESERVED_IDS = frozenset({"gradebook.csv", "index.html", "report.html", "class_report.html", "grading_log.jsonl"})
 #: Folders and files that are not part of what was handed in (editor and OS litter).
 IGNORED_NAMES = frozenset({"__pycache__", "__MACOSX", ".DS_Store"})
 CHUNK = 1 << 16  # bytes read at a time
@@ -227,6 +227,11 @@ def safe_extract(archive: str | os.PathLike, destination: str | os.PathLike, max
     except zipfile.BadZipFile:
         raise SubmissionRefused("the file handed in is not a zip archive (or it is damaged); "
                                 "hand in a .zip holding your exercises folder") from None
+    except UnicodeDecodeError:  # a member name flagged as UTF-8 that is not
+        raise SubmissionRefused("the archive has a member whose name is marked as UTF-8 but is not valid "
+                                "UTF-8; zip your files again with a standard tool") from None
+    except (ValueError, EOFError, NotImplementedError, RecursionError) as exc:
+        raise SubmissionRefused(f"the archive is damaged or uses an unsupported format: {exc}") from None
     except OSError as exc:
         raise SubmissionRefused(f"the archive could not be read ({exc.strerror or exc})") from None
     with archive_file:

@@ -13,7 +13,13 @@ list of results, one call each: fewer round trips for many random cases)
 and one JSON response per line on the file descriptor given as the first argument
 (standard output is the student's, for their prints)::
 
-    {"id": 7, "status": "ok", "value": ..., "args_after": [...], "output": "..."}
+    {"id": 7, "nonce": "...", "status": "ok", "value": ..., "args_after": [...], "output": "..."}
+
+Before any student code runs, the worker writes a first line ``{"hello": true, "pid":
+...}``: the parent learns the worker's process id from it (to kill every other process
+of the sandbox's user after a call), not from answers student code could forge.  Each
+request carries a random ``nonce`` that the answer must echo (see
+:meth:`grader.sandbox.Sandbox.call` for what this does and does not protect).
 
 ``status`` is one of ``ok``, ``not_implemented``, ``import_error``, ``missing``,
 ``error``, ``unreadable`` (a return value the codec cannot encode).  The worker judges
@@ -30,6 +36,7 @@ import traceback
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUTPUT_LIMIT = 8_000  # characters of printed output kept per call
+MESSAGE_LIMIT = 8_000  # characters of an error message kept
 
 
 class CappedText(io.TextIOBase):
@@ -45,7 +52,7 @@ class CappedText(io.TextIOBase):
         return True
 
     def write(self, text):
-        text = str(text)
+        text = str.__str__(text) if isinstance(text, str) else repr(text)
         room = self.limit - self.size
         if room > 0:
             self.parts.append(text[:room])
@@ -59,10 +66,28 @@ class CappedText(io.TextIOBase):
 
 
 def short_traceback(exc: BaseException) -> str:
-    """The last frames of the student's traceback, without the worker's own."""
-    frames = [f for f in traceback.extract_tb(exc.__traceback__) if os.path.abspath(f.filename) != os.path.abspath(__file__)]
-    lines = traceback.format_list(frames[-4:])
-    return "".join(lines) + f"{type(exc).__name__}: {exc}"
+    """The last frames of the student's traceback, without the worker's own (capped).
+
+    Never raises: an exception whose ``__str__`` fails is named by its type alone.
+    """
+    try:
+        frames = [f for f in traceback.extract_tb(exc.__traceback__)
+                  if os.path.abspath(f.filename) != os.path.abspath(__file__)]
+        lines = "".join(traceback.format_list(frames[-4:]))
+    except BaseException:
+        lines = ""
+    try:
+        text = f"{type(exc).__name__}: {exc}"
+    except BaseException:
+        text = f"{type(exc).__name__} (its message could not be shown)"
+    return capped(lines + text)
+
+
+def capped(text: str, limit: int = MESSAGE_LIMIT) -> str:
+    text = str.__str__(text) if isinstance(text, str) else "(not a text)"
+    if len(text) <= limit:
+        return text
+    return text[:limit] + f"\n[... {len(text) - limit} more characters not shown]"
 
 
 class Worker:
@@ -104,7 +129,9 @@ class Worker:
             for part in request["function"].split("."):
                 target = getattr(target, part)
         except AttributeError:
-            return {"status": "missing", "message": f"{request['module']} has no {request['function']}"}
+            return {"status": "missing", "message": capped(f"{request['module']} has no {request['function']}")}
+        except BaseException as exc:  # a module __getattr__ of the student's
+            return {"status": "error", "message": short_traceback(exc)}
         try:
             args = [self.decode(a) for a in request.get("args", [])]
             kwargs = {k: self.decode(v) for k, v in request.get("kwargs", {}).items()}
@@ -127,7 +154,7 @@ class Worker:
         except MemoryError:
             return {"status": "error", "message": "ran out of memory (MemoryError)"}
         except SystemExit as exc:
-            return {"status": "error", "message": f"called sys.exit({exc.code!r}) inside an exercise"}
+            return {"status": "error", "message": capped(f"called sys.exit({exc.code!r}) inside an exercise")}
         except BaseException as exc:
             return {"status": "error", "message": short_traceback(exc)}
         finally:
@@ -137,7 +164,7 @@ class Worker:
                     "args_after": [] if request.get("batch") else
                     [self.codec.encode_body(a) if type(a).__name__ == "Body" else None for a in args]}
         except BaseException as exc:
-            return {"status": "unreadable", "message": f"{type(exc).__name__}: {exc}"}
+            return {"status": "unreadable", "message": short_traceback(exc).rsplit("\n", 1)[-1]}
 
 
 def main() -> None:
@@ -145,21 +172,46 @@ def main() -> None:
     sys.path.insert(0, HERE)
     import codec  # the copy next to this file
 
-    channel = os.fdopen(int(sys.argv[1]), "w", encoding="utf-8")
+    # Everything the loop needs is bound to local names before student code runs, so
+    # that replacing json.dumps or the worker's functions from student code does not
+    # change what this loop does.  (Student code can still reach these objects, e.g.
+    # through gc or frames: the parent trusts nothing it receives, see Sandbox.call.)
+    dumps, loads, getpid, leave = json.dumps, json.loads, os.getpid, os._exit
+    channel = os.fdopen(int(sys.argv[1]), "w", encoding="utf-8", errors="backslashreplace")
+    write, flush = channel.write, channel.flush
+    requests = sys.stdin
+    me = getpid()
+    write(dumps({"hello": True, "pid": me}) + "\n")
+    flush()
     worker = Worker(codec)
-    for line in sys.stdin:
-        request = json.loads(line)
-        captured = CappedText(OUTPUT_LIMIT)
-        response = {"id": request.get("id"), "status": "ok", "value": None, "message": "", "pid": os.getpid()}
-        response.update(worker.handle(request, captured))
-        response["output"] = captured.getvalue()
+    for line in requests:
+        if getpid() != me:
+            leave(0)  # a copy made by os.fork in student code: only the worker reads requests
         try:
-            text = json.dumps(response, allow_nan=True)
+            request = loads(line)
+            nonce, number = str(request.get("nonce")), request.get("id")
+        except Exception:
+            continue  # not a request of the parent's
+        captured = CappedText(OUTPUT_LIMIT)
+        response = {"id": number, "nonce": nonce, "status": "ok", "value": None, "message": ""}
+        try:
+            response.update(worker.handle(request, captured))
+            response["output"] = captured.getvalue()
+            text = dumps(response, allow_nan=True)
         except BaseException as exc:
-            text = json.dumps({"id": request.get("id"), "status": "unreadable", "value": None,
-                               "message": f"{type(exc).__name__}: {exc}", "output": ""})
-        channel.write(text + "\n")
-        channel.flush()
+            try:
+                text = dumps({"id": number, "nonce": nonce, "status": "unreadable", "value": None,
+                              "message": short_traceback(exc).rsplit("\n", 1)[-1], "output": ""})
+            except BaseException:  # json itself broken by student code: no json needed
+                text = ('{"id": %d, "nonce": "%s", "status": "unreadable", "value": null, "output": "", '
+                        '"message": "the answer could not be encoded (was json patched?)"}'
+                        % (number if type(number) is int else 0, nonce if nonce.isalnum() else ""))
+        if getpid() != me:
+            leave(0)  # a forked copy returning from student code never answers
+        # The leading newline ends any partial line student code wrote on the channel,
+        # so that the answer is a line of its own.
+        write("\n" + text + "\n")
+        flush()
 
 
 if __name__ == "__main__":

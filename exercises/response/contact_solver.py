@@ -10,8 +10,9 @@ Jacobian); stopping after a fixed number of sweeps trades accuracy for a predict
 cost.
 
 Every technique has a switch in :class:`SolverSettings`, so a learner can turn one off
-and watch what changes: accumulated impulses, warm starting, friction, rotation, and
-four ways to fix penetration.
+and watch what changes: accumulated impulses, warm starting, friction, rotation, the
+block solver for two-point manifolds, the sweep order, and four ways to fix
+penetration.
 
 Calling contract (how ``World.step`` uses the solver)
 -----------------------------------------------------
@@ -53,17 +54,25 @@ What ``solve`` does, in order
    bounce); for ``"baumgarte"`` the bias ``beta / dt * max(depth - slop, 0)``.  The
    target separating speed is the larger of the two.
 3. Warm start: apply the accumulated impulses remembered from the last step, matched by
-   ``(body pair, feature id)`` (or, when ``Contact.feature_ids`` is None, by the nearest
-   old point within ``warm_start_match_distance``), scaled by ``dt / previous dt``.
-4. ``iterations`` sweeps; per point the normal impulse, then the friction impulse.
-   With ``accumulate_impulses`` the running total is clamped (normal >= 0, friction
-   within ``+-mu`` times the normal total), so a sweep can take back what an earlier
-   one overdid; without it each increment is clamped and impulses can only grow.
-   The points are visited colour by colour (:func:`sweep_order`: the points of one
-   colour share no movable body).  :func:`sweep_loop` visits them one at a time with
-   plain Python floats and is the readable reference; :func:`sweep_batched` solves a
-   whole colour at once with numpy, which gives the same result up to rounding and is
-   faster when colours hold many points (``settings.sweep`` chooses).
+   ``(body pair, feature id)`` (or, when ``Contact.feature_ids`` is None or names a
+   feature the pair did not have, by the nearest old point of the pair within
+   ``warm_start_match_distance``), scaled by ``dt / previous dt``.
+4. ``iterations`` sweeps, manifold by manifold.  Per manifold, the friction impulse
+   of each point, then the normal impulses: the two of a two-point manifold together
+   as one 2x2 linear complementarity problem (the block solver of Box2D,
+   :func:`block_normal_impulses`; ``block_solver=False`` or an ill-conditioned pair
+   solves them one after the other).  With ``accumulate_impulses`` the running totals
+   are clamped (normal >= 0, friction within ``+-mu`` times the normal total so far),
+   so a sweep can take back what an earlier one overdid; without it each increment
+   is clamped, impulses can only grow, and each point's friction follows its normal.
+   The manifolds are visited in batches that share no movable body
+   (:func:`sweep_order`): in the given order (``order="manifolds"``: one sweep
+   carries an impulse through a whole stack) or colour by colour (``"colours"``:
+   fewer, larger batches; ``"auto"`` takes them for large scenes).  :func:`sweep_loop` visits the manifolds one at a time
+   with plain Python floats and is the readable reference; :func:`sweep_batched`
+   solves a whole batch at once with numpy, which gives the same result up to
+   rounding and is faster when batches hold many manifolds (``settings.sweep``
+   chooses).
 5. ``"split_impulse"`` only: the same sweeps on separate pseudo-velocities that push
    overlapping bodies apart at ``beta / dt * max(depth - slop, 0)``; they move the
    positions in :meth:`~ContactSolver.apply_pseudo_velocities` and are then dropped,
@@ -88,7 +97,7 @@ from ..contact import Contact
 
 POSITION_CORRECTIONS = ("none", "baumgarte", "projection", "split_impulse")
 SWEEPS = ("auto", "loop", "batched")
-ORDERS = ("manifolds", "colours")
+ORDERS = ("auto", "manifolds", "colours")
 
 
 @dataclass
@@ -121,8 +130,10 @@ class SolverSettings:
     rotation : bool
         False skips every angular term (enough for circles without friction).
     warm_start_match_distance : float
-        Largest distance (m) between an old and a new contact point matched for warm
-        starting when the contact has no feature ids.
+        Largest distance (m) between an old and a new contact point of the same body
+        pair matched for warm starting when the new point has no feature id, or one
+        the pair did not have last step (the narrow phase swapped the reference face,
+        or clipped a different vertex).
     sweep : str
         ``"loop"``: :func:`sweep_loop`, plain Python floats, one manifold at a time (the
         reference); ``"batched"``: :func:`sweep_batched`, numpy, one batch of
@@ -151,7 +162,7 @@ class SolverSettings:
     warm_start_match_distance: float = 0.05
     sweep: str = "auto"
     block_solver: bool = True
-    order: str = "manifolds"
+    order: str = "auto"
 
     def __post_init__(self):
         if self.position_correction not in POSITION_CORRECTIONS:
@@ -349,7 +360,7 @@ class ContactSolver:
                                                     iib * (r_b[:, 0] * impulse[:, 1] - r_b[:, 1] * impulse[:, 0])]))
         warm_started = int(np.count_nonzero(normal_total)) if warm_start else 0
 
-        # 4. Velocity sweeps, manifold by manifold, colour by colour (see sweep_order).
+        # 4. Velocity sweeps, manifold by manifold, batch by batch (see sweep_order).
         rows, order = self._sweep_rows(manifolds, local, counts, inverse_mass + inverse_inertia > 0.0,
                                        dict(a=a, b=b, nx=nx, ny=ny, rn_a=rn_a, rn_b=rn_b, rt_a=rt_a, rt_b=rt_b,
                                             ima=ima, imb=imb, iia=iia, iib=iib, mass_normal=mass_normal,
@@ -395,7 +406,7 @@ class ContactSolver:
                                  block_manifolds=int(rows.block.sum()))
 
     def _sweep_rows(self, manifolds, local, counts, movable, columns) -> tuple[SweepRows, np.ndarray]:
-        """The points in sweep order, their manifolds, colours and 2x2 matrices ``K``.
+        """The points in sweep order, their manifolds, batches and 2x2 matrices ``K``.
 
         ``columns`` holds the per-point arrays of the prestep (names of
         :attr:`SweepRows.POINT_FIELDS`) in manifold order.  Returns the rows and
@@ -405,7 +416,10 @@ class ContactSolver:
         starts = np.cumsum(counts) - counts                      # first point of each manifold
         manifold_a = np.array([local[i] for i, _, _ in manifolds], dtype=int)
         manifold_b = np.array([local[j] for _, j, _ in manifolds], dtype=int)
-        manifold_order, bounds = sweep_order(manifold_a, manifold_b, movable, self.settings.order)
+        kind = self.settings.order
+        if kind == "auto":
+            kind = "colours" if len(manifolds) >= COLOURS_MIN_MANIFOLDS else "manifolds"
+        manifold_order, bounds = sweep_order(manifold_a, manifold_b, movable, kind)
         count = counts[manifold_order]
         first = np.cumsum(count) - count                         # in sweep order
         order = (np.repeat(starts[manifold_order] - first, count) + np.arange(count.sum())).astype(int)
@@ -609,6 +623,11 @@ class ContactSolver:
 #: operations of one batch cost about as much as this many manifolds of the loop).
 BATCH_MIN_MANIFOLDS_PER_BATCH = 24
 
+#: ``order="auto"`` sweeps colour by colour from this many manifolds on (measured:
+#: below it the Python loop over the manifolds in their own order is as fast as the
+#: numpy batches of the colours; pyramid_10 has 145 manifolds, pyramid_20 about 540).
+COLOURS_MIN_MANIFOLDS = 256
+
 #: The block solver needs cond(K) below about this (dimensionless); above it the two
 #: normal rows of a manifold are nearly dependent (points close together, or no
 #: rotation), the 2x2 solve would amplify rounding, and the points are solved one
@@ -618,7 +637,7 @@ MAX_CONDITION_NUMBER = 1000.0
 
 @dataclass
 class SweepRows:
-    """What the velocity sweeps need, in sweep order (colour by colour, manifold by manifold).
+    """What the velocity sweeps need, in sweep order (batch by batch, manifold by manifold).
 
     Symbols: ``n`` the normal (from A to B), ``t = (n_y, -n_x)`` the tangent,
     ``rn = r x n`` and ``rt = r x t`` for the lever arms ``r`` from the centres of mass.
@@ -647,8 +666,8 @@ class SweepRows:
     k11, k12, k22 : numpy.ndarray, shape (k,)
         ``K = J M^-1 J^T`` of the two normal rows (1/kg): the normal velocity change at
         point i per unit normal impulse at point j.  Set where ``block``.
-    bounds : numpy.ndarray of int, shape (colours + 1,)
-        Colour ``c`` is manifolds ``bounds[c]:bounds[c + 1]`` (see :func:`sweep_order`).
+    bounds : numpy.ndarray of int, shape (batches + 1,)
+        Batch ``c`` is manifolds ``bounds[c]:bounds[c + 1]`` (see :func:`sweep_order`).
     """
 
     a: np.ndarray
@@ -684,9 +703,10 @@ def block_normal_impulses(k11: float, k12: float, k22: float, b1: float, b2: flo
 
     Find impulses ``x = (x1, x2) >= 0`` (N s) such that the normal velocities after
     them, ``v = K x + b`` (m/s), are ``>= 0`` and ``x_i v_i = 0`` (a point pushes only
-    while it touches).  ``b`` is the velocity the points would have with no impulse at
-    all, minus their targets.  The cases, tried in Box2D's order
-    (``b2ContactSolver::SolveVelocityConstraints``):
+    while it touches).  ``b`` holds the normal velocities the points would have
+    without the manifold's normal impulses (the solver takes the accumulated ones
+    back out: ``b = v - K x_old``), minus their targets.  The cases, tried in Box2D's
+    order (``b2ContactSolver::SolveVelocityConstraints``):
 
     1. both points push: ``x = -K^-1 b``, accepted if ``x >= 0``;
     2. only point 1: ``x1 = -b1 / k11``, ``x2 = 0``, accepted if ``x1 >= 0`` and ``v2 >= 0``;
@@ -701,7 +721,7 @@ def block_normal_impulses(k11: float, k12: float, k22: float, b1: float, b2: flo
     k11, k12, k22 : float
         Entries of the symmetric 2x2 matrix ``K`` (1/kg), with ``k11 k22 > k12^2``.
     b1, b2 : float
-        Velocities without impulse, minus the targets (m/s).
+        Normal velocities without the manifold's normal impulses, minus the targets (m/s).
 
     Returns
     -------
@@ -780,8 +800,8 @@ def sweep_order(body_a: np.ndarray, body_b: np.ndarray, movable: np.ndarray,
     >>> [(o.tolist(), b.tolist()) for o, b in (sweep_order(*pairs), sweep_order(*pairs, order="colours"))]
     [([0, 1, 2], [0, 1, 2, 3]), ([0, 2, 1], [0, 2, 3])]
     """
-    if order not in ORDERS:
-        raise ValueError(f"order must be one of {ORDERS}, got {order!r}")
+    if order not in ("manifolds", "colours"):
+        raise ValueError(f"order must be 'manifolds' or 'colours', got {order!r}")
     movable = movable.tolist()
     batch = []
     if order == "manifolds":
@@ -958,7 +978,7 @@ def sweep_loop(velocity: np.ndarray, rows: SweepRows, iterations: int, accumulat
 
 def sweep_batched(velocity: np.ndarray, rows: SweepRows, iterations: int, accumulate: bool,
                   normal_total: np.ndarray, tangent_total: np.ndarray) -> np.ndarray:
-    """The same sweeps as :func:`sweep_loop`, one colour (numpy batches) at a time.
+    """The same sweeps as :func:`sweep_loop`, one batch of manifolds at a time with numpy.
 
     Within a batch (``rows.bounds``) no movable body appears twice, so its manifolds
     can be solved together, a few numpy operations per batch instead of a Python loop
@@ -973,13 +993,17 @@ def sweep_batched(velocity: np.ndarray, rows: SweepRows, iterations: int, accumu
     [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
     """
     r = rows
-    # Per point and body (axis 0: A, B): Jacobian rows J (v_n = sum of J . (vx, vy, w))
-    # and the velocity change per unit impulse M^-1 J^T.
-    inverse_masses = np.stack([np.column_stack([r.ima, r.ima, r.iia]), np.column_stack([r.imb, r.imb, r.iib])])
-    jacobian_normal = np.stack([np.column_stack([-r.nx, -r.ny, -r.rn_a]), np.column_stack([r.nx, r.ny, r.rn_b])])
-    jacobian_tangent = np.stack([np.column_stack([-r.ny, r.nx, -r.rt_a]), np.column_stack([r.ny, -r.nx, r.rt_b])])
+    # Per point: the Jacobian rows J over the six velocities (vx_A, vy_A, w_A, vx_B, vy_B,
+    # w_B), so that v_n = J_n . v and v_t = J_t . v, and the velocity change per unit
+    # impulse M^-1 J^T.
+    zero = np.zeros_like(r.nx)
+    jacobian_normal = np.column_stack([-r.nx, -r.ny, -r.rn_a, r.nx, r.ny, r.rn_b]) + zero[:, None]
+    jacobian_tangent = np.column_stack([-r.ny, r.nx, -r.rt_a, r.ny, -r.nx, r.rt_b]) + zero[:, None]
+    inverse_masses = np.column_stack([r.ima, r.ima, r.iia, r.imb, r.imb, r.iib])
     response_normal = jacobian_normal * inverse_masses
     response_tangent = jacobian_tangent * inverse_masses
+    # Where each point's six velocities sit in velocity.reshape(-1).
+    where = np.column_stack([3 * r.a, 3 * r.a + 1, 3 * r.a + 2, 3 * r.b, 3 * r.b + 1, 3 * r.b + 2])
 
     # Each batch splits into up to three groups: block manifolds, other two-point
     # manifolds, one-point manifolds.  A group's manifolds share no movable body, so
@@ -991,14 +1015,15 @@ def sweep_batched(velocity: np.ndarray, rows: SweepRows, iterations: int, accumu
         for members in (block, ~block & (count == 2), count == 1):
             if members.any():
                 points = [first[members] + slot for slot in range(int(count[members][0]))]
-                groups.append(_BatchGroup(r, points, bool(block[members][0]), r.k11[start:stop][members],
+                groups.append(_BatchGroup(r, points, where, bool(block[members][0]), r.k11[start:stop][members],
                                           r.k12[start:stop][members], r.k22[start:stop][members],
                                           jacobian_normal, response_normal, jacobian_tangent, response_tangent,
                                           normal_total, tangent_total))
-    velocity = velocity.copy()
+    velocity = np.array(velocity, dtype=float, order="C")   # a copy; flat is a view of it
+    flat = velocity.reshape(-1)
     for _ in range(iterations):
         for group in groups:
-            group.solve(velocity, accumulate)
+            group.solve(flat, accumulate)
     for group in groups:
         group.write_totals(normal_total, tangent_total)
     return velocity
@@ -1007,35 +1032,36 @@ def sweep_batched(velocity: np.ndarray, rows: SweepRows, iterations: int, accumu
 class _BatchGroup:
     """Manifolds of one batch with the same number of points and the same normal solve.
 
-    Arrays per slot (first or second point of each manifold), shape (size,) or, for
-    Jacobians and responses, (2, size, 3) with axis 0 = body A, body B.
+    Lists hold one entry per slot (first or second point of each manifold): arrays of
+    shape (size,), or (size, 6) for Jacobians and responses over the six velocities
+    of bodies A and B.
     """
 
-    def __init__(self, r, points, block, k11, k12, k22, jacobian_normal, response_normal,
+    def __init__(self, r, points, where, block, k11, k12, k22, jacobian_normal, response_normal,
                  jacobian_tangent, response_tangent, normal_total, tangent_total):
         self.points = points
-        self.bodies = np.concatenate([r.a[points[0]], r.b[points[0]]])
-        self.size = len(points[0])
+        self.where = where[points[0]]                                # both points: same bodies
         self.block = block
-        self.j_normal = [jacobian_normal[:, p] for p in points]
-        self.m_normal = [response_normal[:, p] for p in points]
-        self.j_tangent = [jacobian_tangent[:, p] for p in points]
-        self.m_tangent = [response_tangent[:, p] for p in points]
+        self.j_normal = [jacobian_normal[p] for p in points]
+        self.m_normal = [response_normal[p] for p in points]
+        self.j_tangent = [jacobian_tangent[p] for p in points]
+        self.m_tangent = [response_tangent[p] for p in points]
         self.mass_normal = [r.mass_normal[p] for p in points]
-        self.mass_tangent = [r.mass_tangent[p] for p in points]
+        self.minus_mass_tangent = [-r.mass_tangent[p] for p in points]
         self.target = [r.target[p] for p in points]
         self.mu = [r.friction[p] for p in points]
         self.has_friction = [bool(np.any(mu != 0.0)) for mu in self.mu]
         self.normal = [normal_total[p].copy() for p in points]       # accumulated impulses (N s)
         self.tangent = [tangent_total[p].copy() for p in points]
-        self.normal_change = [np.zeros(self.size) for _ in points]   # this sweep's increments
+        self.normal_change = [np.zeros(len(p)) for p in points]       # this sweep's increments
         if block:
             self.k11, self.k12, self.k22 = k11, k12, k22
-            self.det = k11 * k22 - k12 * k12
+            det = k11 * k22 - k12 * k12
+            self.inverse = (k22 / det, -k12 / det, k11 / det)         # K^-1 (kg)
 
-    def solve(self, velocity, accumulate) -> None:
-        """One sweep over the group's manifolds: ``velocity`` rows are updated in place."""
-        v = velocity[self.bodies].reshape(2, self.size, 3)
+    def solve(self, flat, accumulate) -> None:
+        """One sweep over the group's manifolds; ``flat`` is the velocity array, raveled."""
+        v = flat[self.where]
         slots = range(len(self.points))
         if accumulate:                      # friction first, as in sweep_loop
             for s in slots:
@@ -1047,10 +1073,10 @@ class _BatchGroup:
                 self._normal(v, s, accumulate)
             if not accumulate:
                 self._friction(v, s, accumulate)
-        velocity[self.bodies] = v.reshape(-1, 3)
+        flat[self.where] = v
 
     def _normal(self, v, s, accumulate) -> None:
-        change = self.mass_normal[s] * (self.target[s] - (v * self.j_normal[s]).sum(axis=(0, 2)))
+        change = self.mass_normal[s] * (self.target[s] - np.einsum("ij,ij->i", v, self.j_normal[s]))
         total = self.normal[s]
         if accumulate:
             new = np.maximum(total + change, 0.0)
@@ -1065,34 +1091,36 @@ class _BatchGroup:
     def _friction(self, v, s, accumulate) -> None:
         if not self.has_friction[s]:
             return
-        change = -self.mass_tangent[s] * (v * self.j_tangent[s]).sum(axis=(0, 2))
+        change = self.minus_mass_tangent[s] * np.einsum("ij,ij->i", v, self.j_tangent[s])
         bound = self.mu[s] * (self.normal[s] if accumulate else self.normal_change[s])
         tangent = self.tangent[s]
         if accumulate:
-            new = np.clip(tangent + change, -bound, bound)
+            new = np.minimum(np.maximum(tangent + change, -bound), bound)
             change = new - tangent
             tangent[:] = new
         else:
-            change = np.clip(change, -bound, bound)
+            change = np.minimum(np.maximum(change, -bound), bound)
             tangent += change
         v += self.m_tangent[s] * change[:, None]
 
     def _block(self, v, accumulate) -> None:
         """:func:`block_normal_impulses` for all manifolds of the group at once."""
-        k11, k12, k22, det = self.k11, self.k12, self.k22, self.det
+        k11, k12, k22 = self.k11, self.k12, self.k22
         old1, old2 = (self.normal[0], self.normal[1]) if accumulate else (0.0, 0.0)
-        b1 = (v * self.j_normal[0]).sum(axis=(0, 2)) - self.target[0] - (k11 * old1 + k12 * old2)
-        b2 = (v * self.j_normal[1]).sum(axis=(0, 2)) - self.target[1] - (k12 * old1 + k22 * old2)
-        # The four cases, the first that fits wins; none fits only by rounding: keep.
-        both1, both2 = (k12 * b2 - k22 * b1) / det, (k12 * b1 - k11 * b2) / det
-        only1, only2 = -b1 / k11, -b2 / k22
-        case_both = (both1 >= 0.0) & (both2 >= 0.0)
-        case_1 = ~case_both & (only1 >= 0.0) & (k12 * only1 + b2 >= 0.0)
-        case_2 = ~case_both & ~case_1 & (only2 >= 0.0) & (k12 * only2 + b1 >= 0.0)
-        case_none = (b1 >= 0.0) & (b2 >= 0.0)
-        stuck = ~(case_both | case_1 | case_2 | case_none)
-        x1 = np.where(case_both, both1, np.where(case_1, only1, np.where(stuck, old1, 0.0)))
-        x2 = np.where(case_both, both2, np.where(case_2, only2, np.where(stuck, old2, 0.0)))
+        b1 = np.einsum("ij,ij->i", v, self.j_normal[0]) - self.target[0] - (k11 * old1 + k12 * old2)
+        b2 = np.einsum("ij,ij->i", v, self.j_normal[1]) - self.target[1] - (k12 * old1 + k22 * old2)
+        n11, n12, n22 = self.inverse
+        x1, x2 = -(n11 * b1 + n12 * b2), -(n12 * b1 + n22 * b2)       # case 1: both push
+        both = (x1 >= 0.0) & (x2 >= 0.0)
+        if not both.all():
+            # Cases 2-4 where case 1 does not fit, the first that fits wins; none fits
+            # only by rounding: keep the impulses.
+            only1, only2 = -b1 / k11, -b2 / k22
+            case_1 = ~both & (only1 >= 0.0) & (k12 * only1 + b2 >= 0.0)
+            case_2 = ~both & ~case_1 & (only2 >= 0.0) & (k12 * only2 + b1 >= 0.0)
+            stuck = ~(both | case_1 | case_2 | ((b1 >= 0.0) & (b2 >= 0.0)))
+            x1 = np.where(both, x1, np.where(case_1, only1, np.where(stuck, old1, 0.0)))
+            x2 = np.where(both, x2, np.where(case_2, only2, np.where(stuck, old2, 0.0)))
         change1, change2 = x1 - old1, x2 - old2
         self.normal[0] += change1
         self.normal[1] += change2
@@ -1152,18 +1180,19 @@ def main(steps: int = 20, dt: float = 1 / 60) -> None:
         bodies, manifolds = pyramid_contacts(base)
         points = sum(len(c.points) for _, _, c in manifolds)
         for iterations in (10, 30):
-            for sweep in ("loop", "batched"):
-                solver = ContactSolver(SolverSettings(iterations=iterations, sweep=sweep))
-                elapsed = []
-                for _ in range(steps):
-                    for body in bodies[1:]:
-                        body.velocity = np.array((0.0, -9.81 * dt))
-                        body.angular_velocity = 0.0
-                    start = time.perf_counter()
-                    solver.solve(bodies, manifolds, dt)
-                    elapsed.append(time.perf_counter() - start)
-                print(f"  {len(bodies) - 1:4d} boxes {points:4d} points {iterations:3d} iterations "
-                      f"{sweep:8s} {1e3 * min(elapsed):7.2f} ms")
+            for order in ("manifolds", "colours"):
+                for sweep in ("loop", "batched"):
+                    solver = ContactSolver(SolverSettings(iterations=iterations, sweep=sweep, order=order))
+                    elapsed = []
+                    for _ in range(steps):
+                        for body in bodies[1:]:
+                            body.velocity = np.array((0.0, -9.81 * dt))
+                            body.angular_velocity = 0.0
+                        start = time.perf_counter()
+                        solver.solve(bodies, manifolds, dt)
+                        elapsed.append(time.perf_counter() - start)
+                    print(f"  {len(bodies) - 1:4d} boxes {points:4d} points {iterations:3d} iterations "
+                          f"{order:9s} {sweep:8s} {1e3 * min(elapsed):7.2f} ms")
 
 
 if __name__ == "__main__":

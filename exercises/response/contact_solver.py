@@ -115,7 +115,9 @@ class SolverSettings:
         there is no total to remember); ignored otherwise.
     position_correction : str
         ``"none"``, ``"baumgarte"`` (velocity bias), ``"projection"`` (linear projection
-        after integration) or ``"split_impulse"`` (separate pseudo-velocities).
+        after integration) or ``"split_impulse"`` (separate pseudo-velocities; the
+        default: measured equal or better than Baumgarte on every named scene, and
+        the only one that holds the 1:1000 mass ratio, since it adds no energy).
     baumgarte : float
         beta in [0, 1] (dimensionless): fraction of the overlap beyond ``slop``
         removed per step by ``"baumgarte"`` and by ``"split_impulse"``.
@@ -152,7 +154,7 @@ class SolverSettings:
     iterations: int = 10
     accumulate_impulses: bool = True
     warm_starting: bool = True
-    position_correction: str = "baumgarte"
+    position_correction: str = "split_impulse"
     baumgarte: float = 0.2
     correction_percent: float = 0.8
     slop: float = 0.005

@@ -339,7 +339,8 @@ class Sandbox:
         python = [sys.executable, "-I", "-X", "utf8", "-B", ".grader/worker.py", str(self._response_fd_in_child)]
         if self.isolation == "plain":
             return python
-        cmd = ["bwrap"]
+        # The empty /tmp comes first: a Python or checkout under /tmp is bound into it below.
+        cmd = ["bwrap", "--tmpfs", "/tmp"]
         folders = [f for f in ["/usr", "/bin", "/lib", "/lib64", "/lib32", "/sbin", *python_folders()] if os.path.isdir(f)]
         # Parents that bwrap would create root-only: make them traversable by the worker's user.
         parents = sorted({str(p) for f in folders for p in Path(f).parents if str(p) != "/"}, key=len)
@@ -351,7 +352,7 @@ class Sandbox:
             if os.path.exists(name):
                 cmd += ["--ro-bind", name, name]
         cmd += ["--bind", str(self.workdir), SANDBOX_MOUNT, "--chdir", SANDBOX_MOUNT,
-                "--proc", "/proc", "--dev", "/dev", "--tmpfs", "/tmp",
+                "--proc", "/proc", "--dev", "/dev",
                 "--unshare-pid", "--unshare-net", "--unshare-ipc", "--unshare-uts", "--unshare-cgroup-try",
                 "--die-with-parent", "--new-session", "--hostname", "sandbox"]
         drop = ["setpriv", f"--reuid={self.uid}", f"--regid={self.uid}", "--clear-groups", "--no-new-privs",

@@ -223,3 +223,19 @@ def test_the_original_submission_is_never_changed(package):
     with Sandbox(package) as box:
         box.call("exercises.hostile", "write_file", ["exercises/hostile.py"])
     assert {p: p.read_bytes() for p in package.rglob("*.py")} == before
+
+
+@needs_bwrap
+def test_a_python_installed_under_tmp_stays_visible(package, monkeypatch):
+    # The sandbox's empty /tmp must be mounted before the Python folders are bound, or a
+    # checkout (and its .venv) under /tmp, as in CI, would be hidden from the worker.
+    import grader.sandbox as sandbox_module
+
+    monkeypatch.setattr(sandbox_module, "python_folders", lambda: ["/tmp/somewhere/.venv"])
+    box = Sandbox(package)
+    box.workdir = Path("/tmp/work")
+    box._response_fd_in_child = 5
+    command = box._command()
+    tmpfs = command.index("--tmpfs")
+    assert command[tmpfs + 1] == "/tmp"
+    assert tmpfs < command.index("/tmp/somewhere/.venv")

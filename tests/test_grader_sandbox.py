@@ -226,16 +226,19 @@ def test_the_original_submission_is_never_changed(package):
 
 
 @needs_bwrap
-def test_a_python_installed_under_tmp_stays_visible(package, monkeypatch):
+def test_a_python_installed_under_tmp_stays_visible(package, monkeypatch, tmp_path):
     # The sandbox's empty /tmp must be mounted before the Python folders are bound, or a
     # checkout (and its .venv) under /tmp, as in CI, would be hidden from the worker.
     import grader.sandbox as sandbox_module
 
-    monkeypatch.setattr(sandbox_module, "python_folders", lambda: ["/tmp/somewhere/.venv"])
+    venv = tmp_path / ".venv"
+    venv.mkdir()
+    assert str(venv).startswith("/tmp/")
+    monkeypatch.setattr(sandbox_module, "python_folders", lambda: [str(venv)])
     box = Sandbox(package)
     box.workdir = Path("/tmp/work")
     box._response_fd_in_child = 5
     command = box._command()
     tmpfs = command.index("--tmpfs")
     assert command[tmpfs + 1] == "/tmp"
-    assert tmpfs < command.index("/tmp/somewhere/.venv")
+    assert tmpfs < command.index(str(venv))

@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-BENCHMARKS = ["bench_broadphase.py", "bench_sat.py", "bench_world.py"]
+BENCHMARKS = ["bench_broadphase.py", "bench_sat.py", "bench_world.py", "bench_hard_cases.py"]
 
 
 def main(argv=None) -> int:

@@ -248,21 +248,26 @@ def uid_in_use(uid: int) -> bool:
         os.close(fd)
 
 
-def processes_of(uids) -> list[tuple[int, int]]:
-    """``(pid, uid)`` of the live (not zombie) processes whose real uid is in ``uids``."""
-    wanted = set(uids)
-    found = []
+def process_table():
+    """``(pid, fields)`` of every process, ``fields`` the lines of /proc/PID/status."""
     for entry in os.listdir("/proc"):
         if not entry.isdigit():
             continue
         try:
             with open(f"/proc/{entry}/status") as handle:
-                fields = dict(line.split(":", 1) for line in handle if ":" in line)
+                yield int(entry), dict(line.split(":", 1) for line in handle if ":" in line)
         except OSError:
             continue
+
+
+def processes_of(uids) -> list[tuple[int, int]]:
+    """``(pid, uid)`` of the live (not zombie) processes whose real uid is in ``uids``."""
+    wanted = set(uids)
+    found = []
+    for pid, fields in process_table():
         uid = int(fields.get("Uid", "-1").split()[0])
         if uid in wanted and not fields.get("State", "").strip().startswith("Z"):
-            found.append((int(entry), uid))
+            found.append((pid, uid))
     return found
 
 
@@ -610,21 +615,14 @@ class Sandbox:
         if self.uid is None:
             return
         killed: list[str] = []
-        for entry in os.listdir("/proc"):
-            if not entry.isdigit():
-                continue
-            try:
-                with open(f"/proc/{entry}/status") as handle:
-                    fields = dict(line.split(":", 1) for line in handle if ":" in line)
-            except OSError:
-                continue
+        for pid, fields in process_table():
             if int(fields.get("Uid", "-1").split()[0]) != self.uid:
                 continue
             if worker_pid is not None and fields.get("NSpid", "").split()[-1:] == [str(worker_pid)]:
                 continue
             try:
-                os.kill(int(entry), signal.SIGKILL)
-                killed.append(entry)
+                os.kill(pid, signal.SIGKILL)
+                killed.append(str(pid))
             except OSError:
                 pass
         deadline = time.monotonic() + 1.0

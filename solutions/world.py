@@ -12,6 +12,9 @@
         integrate positions       x += h v, angle += h w
         correct positions         linear projection / split impulse, if the solver uses it
 
+With ``soft_step`` the contacts are found once per step and each sub-step solves soft
+contacts and relaxes them instead (:mod:`solutions.response.soft_step`, Box2D v3).
+
 Every technique is a switch of :class:`WorldSettings` or of the solver's
 :class:`~solutions.response.contact_solver.SolverSettings`, so a learner can turn one
 off and watch what changes.  A scene (:mod:`solutions.scenes`) sets only what it needs.
@@ -34,8 +37,10 @@ from .continuous import swept_aabb, time_of_impact
 from .contact import Contact
 from .joints import DistanceJoint, JointSolver
 from .narrowphase.dispatch import collide
+from .narrowphase.speculative import SPECULATIVE_MARGIN, speculative_polygon_manifold
 from .response.contact_solver import ContactSolver, SolverSettings
-from .shapes import Shape, bounding_aabb
+from .response.soft_step import BodyStates, SoftStepSolver
+from .shapes import Circle, Shape, bounding_aabb
 
 BROAD_PHASES = ("auto", "all_pairs", "brute_force", "uniform_grid", "quadtree", "numpy_grid")
 
@@ -57,7 +62,13 @@ class WorldSettings:
     continuous : bool
         Sweep bodies flagged ``is_bullet`` against static bodies (no tunnelling).
     substeps : int
-        Sub-steps per call of :meth:`World.step`.
+        Sub-steps per call of :meth:`World.step`.  Plain: each sub-step is a whole
+        step (contacts found again, ``solver.iterations`` sweeps, position correction).
+        With ``soft_step``: contacts are found once per step and each sub-step sweeps
+        ``solver.iterations`` times, soft and then relaxed.
+    soft_step : bool
+        Step as Box2D v3 does (:mod:`~solutions.response.soft_step`): soft contacts
+        and relaxation inside the sub-steps, instead of ``solver.position_correction``.
     solver : SolverSettings
         Switches of the contact solver.
     """
@@ -67,6 +78,7 @@ class WorldSettings:
     broad_phase_min_bodies: int = 16
     continuous: bool = True
     substeps: int = 1
+    soft_step: bool = False
     solver: SolverSettings = field(default_factory=SolverSettings)
 
     def __post_init__(self):
@@ -113,7 +125,7 @@ class World:
                 raise ValueError(f"joint between bodies {joint.a} and {joint.b}: no such body")
         # Bodies joined by a joint do not collide with each other (Box2D's collideConnected = false).
         self._jointed = {(min(j.a, j.b), max(j.a, j.b)) for j in self.joints}
-        self.solver = ContactSolver(self.settings.solver)
+        self.solver = (SoftStepSolver if self.settings.soft_step else ContactSolver)(self.settings.solver)
         self.joint_solver = JointSolver(self.settings.solver.iterations, self.settings.solver.baumgarte,
                                         self.settings.solver.warm_starting)
         self.time = 0.0
@@ -127,6 +139,9 @@ class World:
         if not (dt > 0 and math.isfinite(dt)):
             raise ValueError(f"dt must be a positive number of seconds, got {dt}")
         h = dt / self.settings.substeps
+        if self.settings.soft_step:
+            self.soft_step(h)
+            return
         for _ in range(self.settings.substeps):
             self.apply_gravity(h)
             shapes = self.world_shapes()
@@ -138,6 +153,30 @@ class World:
             self.integrate_positions(displacements, h)
             self.solver.finish_step(self.bodies, self.manifolds, h)
             self.time += h
+
+    def soft_step(self, h: float) -> None:
+        """One step of ``substeps`` soft sub-steps of ``h`` (:mod:`~solutions.response.soft_step`)."""
+        shapes = self.world_shapes()
+        pairs = self.broad_phase(shapes, margin=SPECULATIVE_MARGIN)
+        self.manifolds, separations = self.speculative_narrow_phase(shapes, pairs)   # once per step
+        self.solver.begin_step(self.bodies, self.manifolds, h, separations)
+        states = BodyStates(self.bodies)
+        gravity = np.asarray(self.settings.gravity, dtype=float)
+        bullets = self.settings.continuous and any(b.is_bullet and not b.is_static for b in self.bodies)
+        for _ in range(self.settings.substeps):
+            states.integrate_velocities(gravity, h)
+            self.solver.solve_substep(states, h, use_bias=True)
+            if self.joints or bullets:   # these stages work on the bodies themselves
+                states.write(self.bodies)
+                self.joint_solver.solve(self.bodies, self.joints, h)
+                self.integrate_positions(self.sweep_bullets(None, h), h)
+                states.read(self.bodies)
+            else:
+                states.integrate_positions(h)
+            self.solver.solve_substep(states, h, use_bias=False)
+            self.time += h
+        self.solver.end_step(states, h)
+        states.write(self.bodies)
 
     # The stages -----------------------------------------------------------------
     def apply_gravity(self, h: float) -> None:
@@ -159,8 +198,9 @@ class World:
                 shapes.append(body.world_shape())
         return shapes
 
-    def broad_phase(self, shapes: list[Shape]) -> list[tuple[int, int]]:
-        """Candidate pairs (i, j), i < j, whose AABBs overlap or touch; no static-static pair."""
+    def broad_phase(self, shapes: list[Shape], margin: float = 0.0) -> list[tuple[int, int]]:
+        """Candidate pairs (i, j), i < j, whose AABBs overlap, touch, or are less than
+        ``margin`` (m) apart; no static-static pair."""
         method = self.settings.broad_phase
         n = len(shapes)
         if method == "auto":
@@ -168,7 +208,7 @@ class World:
         if method == "all_pairs":
             pairs = ((i, j) for i in range(n) for j in range(i + 1, n))
         else:
-            aabbs = aabb_array(shapes)
+            aabbs = aabb_array(shapes) + 0.5 * margin * np.array([-1.0, -1.0, 1.0, 1.0])
             if method == "brute_force":
                 pairs = sorted(pairs_brute_force(aabbs))
             elif method == "uniform_grid":
@@ -194,8 +234,30 @@ class World:
         self.stats.max_penetration = max((c.depth for _, _, c in manifolds), default=0.0)
         return manifolds
 
-    def sweep_bullets(self, shapes: list[Shape], h: float) -> dict[int, np.ndarray]:
-        """Displacements of bullets cut short at their first contact with a static body."""
+    def speculative_narrow_phase(self, shapes: list[Shape], pairs) -> tuple[list, list[np.ndarray]]:
+        """Manifolds of the pairs closer than ``SPECULATIVE_MARGIN`` (polygons) or
+        touching (circles), and the signed separation of every point (m, > 0 apart)."""
+        manifolds, separations = [], []
+        for i, j in pairs:
+            if isinstance(shapes[i], Circle) or isinstance(shapes[j], Circle):
+                contact = collide(shapes[i], shapes[j])
+                found = None if contact is None else (contact, -contact.depths)
+            else:
+                found = speculative_polygon_manifold(shapes[i], shapes[j], SPECULATIVE_MARGIN)
+            if found is not None:
+                manifolds.append((i, j, found[0]))
+                separations.append(found[1])
+        self.stats.manifolds = len(manifolds)
+        self.stats.contact_points = sum(len(c.points) for _, _, c in manifolds)
+        self.stats.max_penetration = max((c.depth for _, _, c in manifolds), default=0.0)
+        return manifolds, separations
+
+    def sweep_bullets(self, shapes: list[Shape] | None, h: float) -> dict[int, np.ndarray]:
+        """Displacements of bullets cut short at their first contact with a static body.
+
+        ``shapes``: every body's world shape at the current poses, or None to compute
+        the ones needed.
+        """
         displacements: dict[int, np.ndarray] = {}
         if not self.settings.continuous:
             return displacements
@@ -204,12 +266,15 @@ class World:
             if not body.is_bullet or body.is_static:
                 continue
             move = h * body.velocity
-            sweep = swept_aabb(shapes[index], move)
+            bullet = shapes[index] if shapes is not None else body.world_shape()
+            sweep = swept_aabb(bullet, move)
             first = 1.0
             for k in statics:
-                box = bounding_aabb(shapes[k])
+                if k not in self._static_shapes:
+                    self._static_shapes[k] = self.bodies[k].world_shape()
+                box = bounding_aabb(self._static_shapes[k])
                 if np.all(box.min_corner <= sweep.max_corner) and np.all(sweep.min_corner <= box.max_corner):
-                    t = time_of_impact(shapes[index], move, shapes[k])
+                    t = time_of_impact(bullet, move, self._static_shapes[k])
                     if t is not None and t > 0.0:
                         first = min(first, t)
             if first < 1.0:

@@ -165,6 +165,10 @@ class SolverSettings:
     sweep: str = "auto"
     block_solver: bool = True
     order: str = "auto"
+    max_push_velocity: float = 3.0
+    contact_hertz: float = 30.0
+    contact_damping_ratio: float = 10.0
+    relax: bool = True
 
     def __post_init__(self):
         if self.position_correction not in POSITION_CORRECTIONS:
@@ -179,7 +183,8 @@ class SolverSettings:
         for name in ("baumgarte", "correction_percent"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name} must be in [0, 1], got {getattr(self, name)}")
-        for name in ("slop", "restitution_threshold", "warm_start_match_distance"):
+        for name in ("slop", "restitution_threshold", "warm_start_match_distance", "max_push_velocity",
+                     "contact_hertz", "contact_damping_ratio"):
             if not getattr(self, name) >= 0.0:
                 raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
 
@@ -293,9 +298,47 @@ class ContactSolver:
         if not dt > 0.0:
             raise ValueError(f"dt must be > 0 s, got {dt}")
         accumulate = settings.accumulate_impulses
-        warm_start = settings.warm_starting and accumulate
-        dt_ratio = 1.0 if self._previous_dt is None else dt / self._previous_dt
         self._pseudo_velocities = {}
+        c = self._prepare(bodies, manifolds, dt, block_solver=settings.block_solver)
+        # The target separating speed: restitution, or the Baumgarte bias if larger.
+        position_bias = self.position_bias(c.depth, dt)
+        if settings.position_correction == "baumgarte":
+            c.rows.target[:] = np.maximum(c.rows.target, position_bias[c.order])
+        velocity = self.apply_impulses(c, c.velocity, c.normal_total, c.tangent_total)   # 3. warm start
+
+        # 4. Velocity sweeps, manifold by manifold, batch by batch (see sweep_order).
+        sweep = self._sweep_function(c.rows, len(manifolds))
+        sweep_normal, sweep_tangent = c.normal_total[c.order], c.tangent_total[c.order]
+        velocity = sweep(velocity, c.rows, settings.iterations, accumulate, sweep_normal, sweep_tangent)
+        c.normal_total[c.order], c.tangent_total[c.order] = sweep_normal, sweep_tangent
+
+        # 5. Split impulse: the same sweeps on pseudo-velocities, no friction, no warm start.
+        pseudo_total = 0.0
+        if settings.position_correction == "split_impulse" and c.point_count:
+            pseudo_impulse = np.zeros(c.point_count)
+            pseudo_rows = replace(c.rows, target=position_bias[c.order], friction=np.zeros(c.point_count))
+            pseudo_velocity = sweep(np.zeros_like(velocity), pseudo_rows, settings.iterations, accumulate,
+                                    pseudo_impulse, np.zeros(c.point_count))
+            pseudo_total = float(pseudo_impulse.sum())
+            self._pseudo_velocities = {index: tuple(pseudo_velocity[k].tolist())
+                                       for index, k in c.local.items() if not c.members[k].is_static}
+
+        # 6. Write back, remember the impulses for warm starting, report.
+        self.write_velocities(c, velocity)
+        self._poses_at_solve = {index: (*c.centre[k].tolist(), float(c.members[k].angle))
+                                for index, k in c.local.items()}
+        self.end_contacts(c, dt, total_pseudo_impulse=pseudo_total)
+
+    # The pieces of solve(), shared with the soft step (soft_step.py) ---------------
+    def _prepare(self, bodies: list[Body], manifolds: list[tuple[int, int, Contact]], dt: float,
+                 block_solver: bool) -> PreparedContacts:
+        """Steps 1 and 2 of :meth:`solve` and the recalled warm-start impulses (not yet applied).
+
+        The rows' ``target`` is the restitution target (0 below the threshold).
+        """
+        settings = self.settings
+        warm_start = settings.warm_starting and settings.accumulate_impulses
+        dt_ratio = 1.0 if self._previous_dt is None else dt / self._previous_dt
 
         # 1. The bodies in contact, numbered 0..n-1 here; velocity rows are (vx, vy, w).
         local: dict[int, int] = {}
@@ -343,11 +386,8 @@ class ContactSolver:
         normal_velocity = ((vb[:, 0] - va[:, 0]) * nx + (vb[:, 1] - va[:, 1]) * ny
                            + vb[:, 2] * rn_b - va[:, 2] * rn_a)
         target = np.where(normal_velocity < -settings.restitution_threshold, -restitution * normal_velocity, 0.0)
-        position_bias = settings.baumgarte / dt * np.maximum(depth - settings.slop, 0.0)
-        if settings.position_correction == "baumgarte":
-            target = np.maximum(target, position_bias)
 
-        # 3. Warm start from last step's accumulated impulses.
+        # Last step's accumulated impulses, matched by feature id or position.
         point_keys = self._point_keys(manifolds)
         normal_total = np.zeros(point_count)
         tangent_total = np.zeros(point_count)
@@ -355,59 +395,78 @@ class ContactSolver:
             self._recall_impulses(manifolds, point_keys, normal_total, tangent_total)
             normal_total *= dt_ratio
             tangent_total *= dt_ratio if settings.friction else 0.0
-            impulse = normal_total[:, None] * normal + tangent_total[:, None] * np.stack([ny, -nx], axis=1)
-            np.add.at(velocity, a, -np.column_stack([ima[:, None] * impulse,
-                                                     iia * (r_a[:, 0] * impulse[:, 1] - r_a[:, 1] * impulse[:, 0])]))
-            np.add.at(velocity, b, np.column_stack([imb[:, None] * impulse,
-                                                    iib * (r_b[:, 0] * impulse[:, 1] - r_b[:, 1] * impulse[:, 0])]))
-        warm_started = int(np.count_nonzero(normal_total)) if warm_start else 0
-
-        # 4. Velocity sweeps, manifold by manifold, batch by batch (see sweep_order).
         rows, order = self._sweep_rows(manifolds, local, counts, inverse_mass + inverse_inertia > 0.0,
                                        dict(a=a, b=b, nx=nx, ny=ny, rn_a=rn_a, rn_b=rn_b, rt_a=rt_a, rt_b=rt_b,
                                             ima=ima, imb=imb, iia=iia, iib=iib, mass_normal=mass_normal,
-                                            mass_tangent=mass_tangent, target=target, friction=friction))
+                                            mass_tangent=mass_tangent, target=target, friction=friction),
+                                       block_solver)
+        return PreparedContacts(local=local, members=members, velocity=velocity, centre=centre,
+                                inverse_inertia=inverse_inertia, a=a, b=b, normal=normal, point=point, depth=depth,
+                                r_a=r_a, r_b=r_b, ima=ima, imb=imb, iia=iia, iib=iib, restitution=restitution, normal_velocity=normal_velocity,
+                                point_keys=point_keys, normal_total=normal_total, tangent_total=tangent_total,
+                                warm_started=int(np.count_nonzero(normal_total)) if warm_start else 0,
+                                rows=rows, order=order, manifold_count=len(manifolds), point_count=point_count)
+
+    def position_bias(self, depth: np.ndarray, dt: float) -> np.ndarray:
+        """Separating speed (m/s) that removes ``baumgarte`` of the overlap beyond
+        ``slop`` in one step of ``dt``, capped at ``max_push_velocity``.
+
+        >>> ContactSolver().position_bias(np.array([0.0, 0.015, 1.0]), dt=0.01).round(12).tolist()
+        [0.0, 0.2, 3.0]
+        """
+        bias = self.settings.baumgarte / dt * np.maximum(depth - self.settings.slop, 0.0)
+        return np.minimum(bias, self.settings.max_push_velocity)
+
+    @staticmethod
+    def apply_impulses(c: PreparedContacts, velocity: np.ndarray, normal_impulse: np.ndarray,
+                       tangent_impulse: np.ndarray) -> np.ndarray:
+        """``velocity`` (rows of ``c.members``) after the given impulses (N s, per point in
+        manifold order, along ``n`` and ``t``): +P to B, -P to A, with their torques."""
+        velocity = velocity.copy()
+        nx, ny = c.normal[:, 0], c.normal[:, 1]
+        impulse = normal_impulse[:, None] * c.normal + tangent_impulse[:, None] * np.stack([ny, -nx], axis=1)
+        np.add.at(velocity, c.a, -np.column_stack([c.ima[:, None] * impulse,
+                                                   c.iia * (c.r_a[:, 0] * impulse[:, 1] - c.r_a[:, 1] * impulse[:, 0])]))
+        np.add.at(velocity, c.b, np.column_stack([c.imb[:, None] * impulse,
+                                                  c.iib * (c.r_b[:, 0] * impulse[:, 1] - c.r_b[:, 1] * impulse[:, 0])]))
+        return velocity
+
+    def _sweep_function(self, rows: SweepRows, manifold_count: int):
+        """:func:`sweep_batched` or :func:`sweep_loop`, as ``settings.sweep`` asks."""
         batches = len(rows.bounds) - 1
-        batched = (settings.sweep == "batched"
-                   or (settings.sweep == "auto" and len(manifolds) >= BATCH_MIN_MANIFOLDS_PER_BATCH * batches))
-        sweep = sweep_batched if batched else sweep_loop
-        sweep_normal, sweep_tangent = normal_total[order], tangent_total[order]
-        velocity = sweep(velocity, rows, settings.iterations, accumulate, sweep_normal, sweep_tangent)
-        normal_total[order], tangent_total[order] = sweep_normal, sweep_tangent
+        batched = (self.settings.sweep == "batched"
+                   or (self.settings.sweep == "auto" and manifold_count >= BATCH_MIN_MANIFOLDS_PER_BATCH * batches))
+        return sweep_batched if batched else sweep_loop
 
-        # 5. Split impulse: the same sweeps on pseudo-velocities, no friction, no warm start.
-        pseudo_total = 0.0
-        if settings.position_correction == "split_impulse" and point_count:
-            pseudo_impulse = np.zeros(point_count)
-            pseudo_rows = replace(rows, target=position_bias[order], friction=np.zeros(point_count))
-            pseudo_velocity = sweep(np.zeros_like(velocity), pseudo_rows, settings.iterations, accumulate,
-                                    pseudo_impulse, np.zeros(point_count))
-            pseudo_total = float(pseudo_impulse.sum())
-            self._pseudo_velocities = {index: tuple(pseudo_velocity[k].tolist())
-                                       for index, k in local.items() if not members[k].is_static}
-
-        # 6. Write back, remember the impulses for warm starting, report.
-        for k, body in enumerate(members):
+    @staticmethod
+    def write_velocities(c: PreparedContacts, velocity: np.ndarray) -> None:
+        """Copy rows of ``velocity`` back into the dynamic bodies of ``c``."""
+        for k, body in enumerate(c.members):
             if body.is_static:
                 continue
             body.velocity = velocity[k, :2].copy()
-            if inverse_inertia[k] > 0.0:
+            if c.inverse_inertia[k] > 0.0:
                 body.angular_velocity = float(velocity[k, 2])
-        self._remember_impulses(point_keys, point, normal_total, tangent_total)
-        global_index = list(local)
-        self.contact_impulses = [(global_index[ka], global_index[kb], (px, py), pn, pt)
-                                 for ka, kb, (px, py), pn, pt in zip(a.tolist(), b.tolist(), point.tolist(),
-                                                                     normal_total.tolist(), tangent_total.tolist())]
-        self._poses_at_solve = {index: (*centre[k].tolist(), float(members[k].angle)) for index, k in local.items()}
-        self._previous_dt = dt
-        self.stats = SolverStats(manifolds=len(manifolds), contact_points=point_count,
-                                 total_normal_impulse=float(normal_total.sum()),
-                                 total_pseudo_impulse=pseudo_total,
-                                 max_penetration=float(depth.max(initial=0.0)),
-                                 warm_started_points=warm_started,
-                                 block_manifolds=int(rows.block.sum()))
 
-    def _sweep_rows(self, manifolds, local, counts, movable, columns) -> tuple[SweepRows, np.ndarray]:
+    def end_contacts(self, c: PreparedContacts, dt: float, total_pseudo_impulse: float = 0.0) -> None:
+        """Remember the impulses for warm starting and fill :attr:`stats` and
+        :attr:`contact_impulses`."""
+        self._remember_impulses(c.point_keys, c.point, c.normal_total, c.tangent_total)
+        global_index = list(c.local)
+        self.contact_impulses = [(global_index[ka], global_index[kb], (px, py), pn, pt)
+                                 for ka, kb, (px, py), pn, pt in zip(c.a.tolist(), c.b.tolist(), c.point.tolist(),
+                                                                     c.normal_total.tolist(),
+                                                                     c.tangent_total.tolist())]
+        self._previous_dt = dt
+        self.stats = SolverStats(manifolds=c.manifold_count, contact_points=c.point_count,
+                                 total_normal_impulse=float(c.normal_total.sum()),
+                                 total_pseudo_impulse=total_pseudo_impulse,
+                                 max_penetration=float(c.depth.max(initial=0.0)),
+                                 warm_started_points=c.warm_started,
+                                 block_manifolds=int(c.rows.block.sum()))
+
+    def _sweep_rows(self, manifolds, local, counts, movable, columns,
+                    block_solver: bool) -> tuple[SweepRows, np.ndarray]:
         """The points in sweep order, their manifolds, batches and 2x2 matrices ``K``.
 
         ``columns`` holds the per-point arrays of the prestep (names of
@@ -438,7 +497,7 @@ class ContactSolver:
         k12[two] = ima + imb + iia * rn_a1 * rn_a2 + iib * rn_b1 * rn_b2
         # cond(K) < MAX_CONDITION_NUMBER, tested as Box2D does (k11^2 < c det K) but with
         # the larger diagonal entry, so that the test does not depend on the point order.
-        block = two & self.settings.block_solver & (np.maximum(k11, k22) ** 2
+        block = two & block_solver & (np.maximum(k11, k22) ** 2
                                                     < MAX_CONDITION_NUMBER * (k11 * k22 - k12 * k12))
         rows = SweepRows(**point, first=first, count=count, block=block, k11=np.where(block, k11, 0.0),
                          k12=np.where(block, k12, 0.0), k22=np.where(block, k22, 0.0), bounds=bounds)
@@ -635,6 +694,47 @@ COLOURS_MIN_MANIFOLDS = 256
 #: rotation), the 2x2 solve would amplify rounding, and the points are solved one
 #: after the other instead.  Box2D's ``k_maxConditionNumber``.
 MAX_CONDITION_NUMBER = 1000.0
+
+
+@dataclass
+class PreparedContacts:
+    """The contact points of one step, gathered and pre-computed once (the prestep).
+
+    Per body in contact (rows of ``velocity``): ``members`` and their ``centre`` (m),
+    ``inverse_inertia``; ``local`` maps a world body index to its row.  Per point, in
+    manifold order: bodies ``a``, ``b`` (rows), ``normal``, ``point`` (m), ``depth`` (m),
+    lever arms ``r_a``, ``r_b`` (m), inverse masses and inertias of A and B, pair
+    ``restitution``, ``normal_velocity`` before any impulse (m/s), warm-start keys and
+    the accumulated impulses ``normal_total``, ``tangent_total`` (N s).  ``rows`` holds
+    the same points in sweep order: ``rows.x == x[order]``.
+    """
+
+    local: dict
+    members: list
+    velocity: np.ndarray
+    centre: np.ndarray
+    inverse_inertia: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    normal: np.ndarray
+    point: np.ndarray
+    depth: np.ndarray
+    r_a: np.ndarray
+    r_b: np.ndarray
+    ima: np.ndarray
+    imb: np.ndarray
+    iia: np.ndarray
+    iib: np.ndarray
+    restitution: np.ndarray
+    normal_velocity: np.ndarray
+    point_keys: list
+    normal_total: np.ndarray
+    tangent_total: np.ndarray
+    warm_started: int
+    rows: "SweepRows"
+    order: np.ndarray
+    manifold_count: int
+    point_count: int
 
 
 @dataclass

@@ -1,0 +1,102 @@
+"""Speculative manifolds: contact points of polygons that touch, overlap, or nearly touch.
+
+The soft step (:mod:`solutions.response.soft_step`) finds contacts once per step and
+moves the bodies several times before it looks again.  A box resting on a face then
+needs both of its corners in the manifold even when one of them has lifted by a
+hair: without that corner the box pivots on the other one and the stack rocks.  So,
+as Box2D v3 does, the soft step keeps every clipped point within ``margin`` (m)
+above the reference face, with its signed ``separation`` (m, > 0 apart, <= 0
+overlapping); the solver lets a point with separation ``s > 0`` close at ``s / h``
+and no faster, so a speculative point never pulls.
+
+The reference and incident faces and the clipping are those of
+:func:`~solutions.narrowphase.polygon_polygon.collide_polygon_polygon` (the same
+helpers and tolerances); only the last test keeps points up to ``margin`` instead of
+0.  Circles are not handled here: the soft step uses the exact contact for them.
+Normal from A to B, SI units.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..contact import Contact
+from ..shapes import AABB, OBB, ConvexPolygon
+from .polygon_polygon import (KEEP_POINT_TOL, REFERENCE_FACE_ABSOLUTE_TOL, REFERENCE_FACE_RELATIVE_TOL,
+                              clip_segment_to_half_plane, incident_face, max_face_separation, polygon_faces)
+
+#: Box2D's speculative distance, 4 times its linear slop of 5 mm (m).
+SPECULATIVE_MARGIN = 0.02
+
+
+def speculative_polygon_manifold(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | ConvexPolygon,
+                                 margin: float = SPECULATIVE_MARGIN) -> tuple[Contact, np.ndarray] | None:
+    """Manifold of two polygonal shapes closer than ``margin``, with signed separations.
+
+    Parameters
+    ----------
+    a, b : AABB, OBB or ConvexPolygon
+        Shapes in world coordinates (m).
+    margin : float
+        Largest separation (m) of a point that is kept, >= 0.
+
+    Returns
+    -------
+    (Contact, numpy.ndarray) or None
+        The contact (its ``depths`` are the separations' overlaps, clamped at 0, so
+        it follows the :class:`~solutions.contact.Contact` conventions) and the
+        separation of each point (m; ``-depth`` where they overlap).  None when a face
+        separates the shapes by more than ``margin`` or no point is that close.
+
+    Examples
+    --------
+    A crate hovering 1 cm above the floor gives two speculative points:
+
+    >>> floor = AABB((-5.0, -1.0), (5.0, 0.0))
+    >>> crate = OBB((0.0, 0.51), (0.5, 0.5), 0.0)
+    >>> contact, separations = speculative_polygon_manifold(floor, crate)
+    >>> contact.normal.tolist(), contact.depth, separations.round(12).tolist()
+    ([0.0, 1.0], 0.0, [0.01, 0.01])
+    >>> speculative_polygon_manifold(floor, crate, margin=0.005) is None
+    True
+    """
+    if not margin >= 0.0:
+        raise ValueError(f"margin must be >= 0 m, got {margin}")
+    polygon_a, polygon_b = polygon_faces(a), polygon_faces(b)
+    separation_a, face_a = max_face_separation(*polygon_a, polygon_b[0])
+    if separation_a > margin:
+        return None
+    separation_b, face_b = max_face_separation(*polygon_b, polygon_a[0])
+    if separation_b > margin:
+        return None
+    scale = max(float(np.max(np.abs(polygon_a[0]))), float(np.max(np.abs(polygon_b[0]))))
+    b_clearly_better = separation_b > (separation_a + REFERENCE_FACE_RELATIVE_TOL * abs(separation_a)
+                                       + REFERENCE_FACE_ABSOLUTE_TOL * scale)
+    if b_clearly_better:
+        ref_name, face, (ref_vertices, ref_normals, ref_faces), incident = "B", face_b, polygon_b, polygon_a
+    else:
+        ref_name, face, (ref_vertices, ref_normals, ref_faces), incident = "A", face_a, polygon_a, polygon_b
+    n = ref_normals[int(np.flatnonzero(ref_faces == face)[0])]
+    tangent = np.array([-n[1], n[0]])
+    v1, v2 = ref_vertices[face], ref_vertices[(face + 1) % len(ref_vertices)]
+    inc_vertices, inc_normals, inc_faces = incident
+    j = incident_face(inc_normals, inc_faces, n)
+    j2 = (j + 1) % len(inc_vertices)
+    segment = [(inc_vertices[j], (ref_name, face, j, j)), (inc_vertices[j2], (ref_name, face, j, j2))]
+    roundoff = KEEP_POINT_TOL * scale
+    segment = clip_segment_to_half_plane(segment, tangent, float(tangent @ v2), roundoff)
+    segment = clip_segment_to_half_plane(segment, -tangent, float(-tangent @ v1), roundoff)
+    points, separations, ids = [], [], []
+    for point, feature in segment:
+        separation = float(n @ (point - v1))
+        midpoint = point - 0.5 * separation * n
+        if separation <= margin + roundoff and not any(float(np.max(np.abs(midpoint - q))) <= roundoff
+                                                       for q in points):
+            points.append(midpoint)
+            separations.append(separation)
+            ids.append(feature)
+    if not points:
+        return None
+    separations = np.array(separations)
+    normal = n if ref_name == "A" else 0.0 - n
+    depths = np.maximum(-separations, 0.0)
+    return Contact(normal, float(depths.max()), np.array(points), depths, tuple(ids)), separations

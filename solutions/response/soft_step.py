@@ -1,0 +1,371 @@
+"""Soft step: sub-stepping with soft contacts and relaxation, after Box2D v3.
+
+A plain step finds contacts, solves velocities with many iterations and corrects
+positions.  The soft step finds contacts once per step of ``dt`` and then takes ``n``
+sub-steps of ``h = dt / n``, each with a single sweep, following Erin Catto's
+"Solver2D" soft step (the solver of Box2D v3)::
+
+    find contacts once            manifolds at the poses of the start of the step
+    prepare                       lever arms, effective masses, last step's impulses
+    for each sub-step:
+        apply gravity             v += h g
+        warm start                apply the accumulated impulses
+        solve (biased, soft)      a stiff damped spring pushes the overlap apart
+        integrate positions       x += h v, angle += h w
+        relax (rigid, no bias)    take the push velocity back out
+    restitution                   one pass, from the closing speeds at the start
+    remember impulses             for the next step's warm start
+
+Between sub-steps the separation of each contact point is updated from how far its
+two bodies moved and turned since the start of the step (the contact's normal and
+lever arms stay those of the start), so the push fades as the overlap closes.  Small
+sub-steps make the stack's impulses travel as far as many iterations would, the
+spring keeps the push smooth, and relaxing removes the push velocity that Baumgarte
+would leave in (no energy gain).
+
+Soft contact
+------------
+A contact point with separation ``s`` (m, < 0 when overlapping) is a spring of
+natural frequency ``f`` (Hz) and damping ratio ``zeta`` acting on the point's
+effective mass.  Implicit Euler over ``h`` gives, with ``omega = 2 pi f``
+(:func:`soft_coefficients`)::
+
+    bias_rate     = omega / (2 zeta + h omega)                        (1/s)
+    mass_scale    = h omega (2 zeta + h omega) / (1 + h omega (2 zeta + h omega))
+    impulse_scale = 1 / (1 + h omega (2 zeta + h omega))
+
+and the normal impulse of one sweep is ``-m_n mass_scale (v_n + bias) - impulse_scale
+P_acc`` with ``bias = max(bias_rate * min(s + slop, 0), -max_push_velocity)``.  A
+point that has opened (``s > 0``) may close at up to ``s / h`` and is rigid.  Contacts
+against static bodies use twice the frequency (they must carry whole stacks).  The
+frequency is capped at a quarter of the sub-step rate, ``1 / (4 h)``, where implicit
+Euler stays accurate.  Settings: ``contact_hertz``, ``contact_damping_ratio``,
+``relax``, ``slop``, ``max_push_velocity`` and ``iterations`` (sweeps per pass) of
+:class:`~solutions.response.contact_solver.SolverSettings`.
+
+Each sweep solves every manifold's normal impulses and then its friction impulses
+(Box2D v3's order), the friction bounded by ``mu`` times the accumulated normal
+impulse.  Normal from body A to body B, SI units.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..body import Body
+from ..contact import Contact
+from .contact_solver import ContactSolver, PreparedContacts
+
+
+def soft_coefficients(hertz: float, damping_ratio: float, h: float) -> tuple[float, float, float]:
+    """``(bias_rate, mass_scale, impulse_scale)`` of a soft constraint (module docstring).
+
+    Parameters
+    ----------
+    hertz : float
+        Natural frequency f (Hz), >= 0; 0 gives a rigid constraint without bias.
+    damping_ratio : float
+        zeta (dimensionless), >= 0.
+    h : float
+        Sub-step (s), > 0.
+
+    Returns
+    -------
+    (float, float, float)
+        bias rate (1/s), mass scale and impulse scale (dimensionless, both in [0, 1]).
+
+    Examples
+    --------
+    >>> [round(x, 6) for x in soft_coefficients(30.0, 10.0, 1 / 240)]
+    [9.068653, 0.942279, 0.057721]
+    >>> soft_coefficients(0.0, 1.0, 0.01)
+    (0.0, 1.0, 0.0)
+    """
+    if hertz == 0.0:
+        return 0.0, 1.0, 0.0
+    omega = 2.0 * math.pi * hertz
+    a1 = 2.0 * damping_ratio + h * omega
+    a2 = h * omega * a1
+    a3 = 1.0 / (1.0 + a2)
+    return omega / a1, a2 * a3, a3
+
+
+class BodyStates:
+    """Poses and velocities of all bodies as arrays, for the sub-steps of one step.
+
+    ``position`` (N, 2) m, ``angle`` (N,) rad, ``velocity`` (N, 3) rows ``(vx, vy, w)``
+    in m/s and rad/s; ``dynamic`` and ``turning`` (N,) say which bodies move and which
+    turn (finite inertia).  :meth:`write` copies them back into the bodies.
+    """
+
+    def __init__(self, bodies: list[Body]):
+        self.dynamic = np.array([not body.is_static for body in bodies], dtype=bool)
+        self.turning = np.array([body.inverse_inertia > 0.0 for body in bodies], dtype=bool)
+        self.read(bodies)
+
+    def read(self, bodies: list[Body]) -> None:
+        """Take the poses and velocities from the bodies."""
+        self.position = np.array([body.position.tolist() for body in bodies], dtype=float).reshape(-1, 2)
+        self.angle = np.array([float(body.angle) for body in bodies])
+        self.velocity = np.array([(*body.velocity.tolist(), float(body.angular_velocity)) for body in bodies],
+                                 dtype=float).reshape(-1, 3)
+        self.velocity[~self.turning, 2] = 0.0
+
+    def write(self, bodies: list[Body]) -> None:
+        """Put the poses and velocities of the dynamic bodies back into them."""
+        for k in np.flatnonzero(self.dynamic).tolist():
+            body = bodies[k]
+            body.position = self.position[k].copy()
+            body.velocity = self.velocity[k, :2].copy()
+            if self.turning[k]:
+                body.angle = float(self.angle[k])
+                body.angular_velocity = float(self.velocity[k, 2])
+
+    def integrate_velocities(self, gravity: np.ndarray, h: float) -> None:
+        """v += h g for the dynamic bodies."""
+        self.velocity[self.dynamic, :2] += h * gravity
+
+    def integrate_positions(self, h: float) -> None:
+        """x += h v, angle += h w (static bodies have v = 0)."""
+        self.position += h * self.velocity[:, :2]
+        self.angle += h * self.velocity[:, 2]
+
+
+class SoftStepSolver(ContactSolver):
+    """Contact solver of the soft step; :class:`~solutions.world.World` drives it.
+
+    Calling contract, per step of ``dt`` with ``n`` sub-steps of ``h``, on the
+    :class:`BodyStates` of the world's bodies::
+
+        solver.begin_step(bodies, manifolds, h, separations)
+        states = BodyStates(bodies)
+        for _ in range(n):
+            states.integrate_velocities(gravity, h)
+            solver.solve_substep(states, h, use_bias=True)    # warm start + soft solve
+            states.integrate_positions(h)
+            solver.solve_substep(states, h, use_bias=False)   # relax (if settings.relax)
+        solver.end_step(states, h)                             # restitution, memory, stats
+        states.write(bodies)
+
+    Examples
+    --------
+    A 1 kg box resting flat on static ground, 1 cm deep: four sub-steps push it
+    up without leaving it an upward velocity.
+
+    >>> ground = Body.box(10.0, 1.0, position=(0.0, -0.5), is_static=True)
+    >>> box = Body.box(1.0, 1.0, position=(0.0, 0.49))
+    >>> sunk = Contact((0.0, 1.0), 0.01, [(-0.5, -0.005), (0.5, -0.005)], feature_ids=(0, 1))
+    >>> solver, h, gravity = SoftStepSolver(), 1 / 240, np.array([0.0, -9.81])
+    >>> solver.begin_step([ground, box], [(0, 1, sunk)], h)
+    >>> states = BodyStates([ground, box])
+    >>> for _ in range(4):
+    ...     states.integrate_velocities(gravity, h)
+    ...     solver.solve_substep(states, h, use_bias=True)
+    ...     states.integrate_positions(h)
+    ...     solver.solve_substep(states, h, use_bias=False)
+    >>> solver.end_step(states, h)
+    >>> states.write([ground, box])
+    >>> bool(0.49 < box.position[1] < 0.5), bool(abs(box.velocity[1]) < 1e-9)
+    (True, True)
+    """
+
+    def begin_step(self, bodies: list[Body], manifolds: list[tuple[int, int, Contact]], h: float,
+                   separations: list[np.ndarray] | None = None) -> None:
+        """Prepare the contacts found at the start of the step for sub-steps of ``h`` (s).
+
+        ``separations``: per manifold, the signed separation of each point (m, > 0 for
+        the speculative points of :mod:`~solutions.narrowphase.speculative`); by
+        default ``-contact.depths``.
+        """
+        settings = self.settings
+        if not h > 0.0:
+            raise ValueError(f"h must be > 0 s, got {h}")
+        if not settings.accumulate_impulses:
+            raise ValueError("the soft step needs accumulate_impulses=True (its spring acts on the totals)")
+        c = self._prepare(bodies, manifolds, h, block_solver=False)
+        if separations is not None:
+            if [len(s) for s in separations] != [len(contact.points) for _, _, contact in manifolds]:
+                raise ValueError("separations must give one value per contact point of each manifold")
+            c.depth = -np.concatenate(separations) if separations else np.zeros(0)
+        self._contacts = c
+        self._rows = np.array(list(c.local), dtype=int)      # world index of each member
+        self._start_angle = np.array([float(body.angle) for body in c.members])
+        self._separation = -c.depth                            # at the poses of the start
+        hertz = min(settings.contact_hertz, 0.25 / h)
+        soft = soft_coefficients(hertz, settings.contact_damping_ratio, h)
+        stiff = soft_coefficients(2.0 * hertz, settings.contact_damping_ratio, h)
+        against_static = (c.ima == 0.0) | (c.imb == 0.0)
+        self._bias_rate, self._mass_scale, self._impulse_scale = (
+            np.where(against_static, s2, s1) for s1, s2 in zip(soft, stiff))
+        self._max_normal = np.zeros(c.point_count)
+        back = np.argsort(c.order)                             # sweep order -> manifold order
+        mass_normal, mass_tangent, friction = c.rows.mass_normal[back], c.rows.mass_tangent[back], c.rows.friction[back]
+        # One entry per manifold: bodies, normal, inverse masses and its points
+        # (index, r_A x n, r_B x n, r_A x t, r_B x t, 1/K_n, 1/K_t, mu), in manifold order.
+        nx, ny = c.normal[:, 0], c.normal[:, 1]
+        rn_a = (c.r_a[:, 0] * ny - c.r_a[:, 1] * nx).tolist()
+        rn_b = (c.r_b[:, 0] * ny - c.r_b[:, 1] * nx).tolist()
+        rt_a = (-(c.r_a[:, 0] * nx + c.r_a[:, 1] * ny)).tolist()
+        rt_b = (-(c.r_b[:, 0] * nx + c.r_b[:, 1] * ny)).tolist()
+        columns = list(zip(range(c.point_count), rn_a, rn_b, rt_a, rt_b, mass_normal.tolist(),
+                           mass_tangent.tolist(), friction.tolist()))
+        self._program = []
+        first = 0
+        for _, _, contact in manifolds:
+            k = first
+            first += len(contact.points)
+            self._program.append((int(c.a[k]), int(c.b[k]), float(nx[k]), float(ny[k]), float(c.ima[k]),
+                                  float(c.imb[k]), float(c.iia[k]), float(c.iib[k]), columns[k:first]))
+
+    def separations(self, states: BodyStates) -> np.ndarray:
+        """Separation (m, < 0 overlapping) of each contact point now, per point in
+        manifold order: the separation at the start of the step, plus how far the two
+        material points that touched there have moved apart along the normal."""
+        c = self._contacts
+        moved = states.position[self._rows] - c.centre
+        turned = states.angle[self._rows] - self._start_angle
+        cos, sin = np.cos(turned), np.sin(turned)
+
+        def point_moved(rows, r):
+            """Displacement of the material point at lever arm r of body ``rows``."""
+            ca, sa = cos[rows], sin[rows]
+            return moved[rows] + np.column_stack([(ca - 1.0) * r[:, 0] - sa * r[:, 1],
+                                                  sa * r[:, 0] + (ca - 1.0) * r[:, 1]])
+
+        apart = point_moved(c.b, c.r_b) - point_moved(c.a, c.r_a)
+        return np.einsum("ij,ij->i", apart, c.normal) - c.depth
+
+    def solve_substep(self, states: BodyStates, h: float, use_bias: bool) -> None:
+        """One pass of ``iterations`` sweeps on ``states``: warm start and soft solve
+        (``use_bias``), or relax (rigid, no push; skipped when ``settings.relax`` is off).
+
+        The biased pass must come before the sub-step's position update, the relax
+        pass after it.
+        """
+        settings = self.settings
+        c = self._contacts
+        if not c.point_count or (not use_bias and not settings.relax):
+            return
+        velocity = states.velocity[self._rows]
+        if use_bias:
+            velocity = self.apply_impulses(c, velocity, c.normal_total, c.tangent_total)
+            separation = self._separation if self._separation is not None else self.separations(states)
+            self._separation = None                             # positions move next
+        else:
+            separation = self._separation = self.separations(states)
+        opened = separation > 0.0
+        target = np.where(opened, -separation / h, 0.0)       # closing allowed up to s / h (m/s)
+        if use_bias:
+            push = np.minimum(-self._bias_rate * separation, settings.max_push_velocity)
+            target = np.where(opened, target, push)
+            mass_scale = np.where(opened, 1.0, self._mass_scale)
+            impulse_scale = np.where(opened, 0.0, self._impulse_scale)
+        else:
+            mass_scale, impulse_scale = np.ones(c.point_count), np.zeros(c.point_count)
+        velocity = soft_sweeps(velocity, self._program, settings.iterations, c.normal_total, c.tangent_total,
+                               target, mass_scale, impulse_scale, friction=True)
+        if use_bias:
+            np.maximum(self._max_normal, c.normal_total, out=self._max_normal)
+        states.velocity[self._rows] = velocity * states.dynamic[self._rows, None]
+
+    def end_step(self, states: BodyStates, h: float) -> None:
+        """Restitution, then remember the impulses and fill ``stats``.
+
+        Restitution: one sweep over the points that closed faster than
+        ``restitution_threshold`` at the start of the step and pushed in some
+        sub-step, aiming at ``-e`` times that closing speed.
+        """
+        c = self._contacts
+        if c.point_count:
+            bounce = ((c.normal_velocity < -self.settings.restitution_threshold) & (self._max_normal > 0.0)
+                      & (c.restitution > 0.0))
+            if bounce.any():
+                velocity = soft_sweeps(states.velocity[self._rows], self._program, 1, c.normal_total,
+                                       c.tangent_total, -c.restitution * c.normal_velocity, bounce.astype(float),
+                                       np.zeros(c.point_count), friction=False)
+                states.velocity[self._rows] = velocity * states.dynamic[self._rows, None]
+        self.end_contacts(c, h)
+
+
+def soft_sweeps(velocity: np.ndarray, program: list, iterations: int, normal_total: np.ndarray,
+                tangent_total: np.ndarray, target: np.ndarray, mass_scale: np.ndarray,
+                impulse_scale: np.ndarray, friction: bool) -> np.ndarray:
+    """Sweeps of soft sequential impulses, manifold by manifold.
+
+    Per point ``k`` the normal impulse change is ``m_n mass_scale[k] (target[k] - v_n)
+    - impulse_scale[k] P_k`` with the accumulated ``P_k`` clamped to >= 0; then (if
+    ``friction``) the tangent impulses, accumulated within ``+-mu P_k``.
+    ``mass_scale = 1``, ``impulse_scale = 0`` is the rigid sequential impulse of
+    :func:`~solutions.response.contact_solver.sweep_loop`; ``mass_scale = 0`` leaves a
+    point out.
+
+    Parameters
+    ----------
+    velocity : numpy.ndarray, shape (n, 3)
+        Rows ``(vx, vy, w)`` (m/s, rad/s).
+    program : list
+        Per manifold ``(a, b, nx, ny, 1/m_A, 1/m_B, 1/I_A, 1/I_B, points)`` with points
+        ``(k, r_A x n, r_B x n, r_A x t, r_B x t, m_n, m_t, mu)``.
+    iterations : int
+        Sweeps.
+    normal_total, tangent_total : numpy.ndarray, shape (m,)
+        Accumulated impulses (N s), updated in place.
+    target : numpy.ndarray, shape (m,)
+        Wanted separating normal velocity (m/s).
+    mass_scale, impulse_scale : numpy.ndarray, shape (m,)
+        Soft-constraint scales (dimensionless).
+    friction : bool
+        Solve the tangent impulses too.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 3)
+
+    Examples
+    --------
+    A 1 kg disc falling at 1 m/s on static ground, rigid: one sweep stops it.
+
+    >>> program = [(0, 1, 0.0, 1.0, 0.0, 1.0, 0.0, 2.0, [(0, 0.0, 0.0, 0.0, 0.5, 1.0, 1 / 1.5, 0.0)])]
+    >>> soft_sweeps(np.array([[0.0, 0.0, 0.0], [0.0, -1.0, 0.0]]), program, 1, np.zeros(1), np.zeros(1),
+    ...             np.zeros(1), np.ones(1), np.zeros(1), friction=True).tolist()
+    [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
+    """
+    vx, vy, w = velocity.T.tolist()
+    normal, tangent = normal_total.tolist(), tangent_total.tolist()
+    target, mass_scale, impulse_scale = target.tolist(), mass_scale.tolist(), impulse_scale.tolist()
+    for _ in range(iterations):
+        for a, b, nx, ny, ima, imb, iia, iib, points in program:
+            vxa, vya, wa, vxb, vyb, wb = vx[a], vy[a], w[a], vx[b], vy[b], w[b]
+            for k, rn_a, rn_b, _, _, mass_normal, _, _ in points:
+                normal_velocity = (vxb - vxa) * nx + (vyb - vya) * ny + wb * rn_b - wa * rn_a
+                old = normal[k]
+                change = mass_normal * mass_scale[k] * (target[k] - normal_velocity) - impulse_scale[k] * old
+                normal[k] = max(old + change, 0.0)
+                change = normal[k] - old
+                vxa -= ima * change * nx
+                vya -= ima * change * ny
+                wa -= iia * rn_a * change
+                vxb += imb * change * nx
+                vyb += imb * change * ny
+                wb += iib * rn_b * change
+            if friction:
+                for k, _, _, rt_a, rt_b, _, mass_tangent, mu in points:
+                    if mu == 0.0:
+                        continue
+                    # Along t = (ny, -nx), within the Coulomb bound mu P_k.
+                    tangent_velocity = (vxb - vxa) * ny - (vyb - vya) * nx + wb * rt_b - wa * rt_a
+                    bound = mu * normal[k]
+                    old = tangent[k]
+                    tangent[k] = min(max(old - mass_tangent * tangent_velocity, -bound), bound)
+                    change = tangent[k] - old
+                    vxa -= ima * change * ny
+                    vya += ima * change * nx
+                    wa -= iia * rt_a * change
+                    vxb += imb * change * ny
+                    vyb -= imb * change * nx
+                    wb += iib * rt_b * change
+            vx[a], vy[a], w[a], vx[b], vy[b], w[b] = vxa, vya, wa, vxb, vyb, wb
+    normal_total[:] = normal
+    tangent_total[:] = tangent
+    return np.array([vx, vy, w], dtype=float).T.reshape(-1, 3)

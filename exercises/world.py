@@ -40,7 +40,7 @@ from .joints import DistanceJoint, JointSolver
 from .narrowphase.dispatch import collide
 from .narrowphase.speculative import SPECULATIVE_MARGIN, speculative_polygon_manifold
 from .response.contact_solver import ContactSolver, SolverSettings
-from .response.soft_step import BodyStates, SoftStepSolver
+from .response.soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, BodyStates, SoftStepSolver, soft_coefficients
 from .shapes import Circle, Shape, bounding_aabb
 
 BROAD_PHASES = ("auto", "all_pairs", "brute_force", "uniform_grid", "quadtree", "numpy_grid")
@@ -164,13 +164,16 @@ class World:
         states = BodyStates(self.bodies)
         gravity = np.asarray(self.settings.gravity, dtype=float)
         bullets = self.settings.continuous and any(b.is_bullet and not b.is_static for b in self.bodies)
+        joint_softness = soft_coefficients(min(JOINT_HERTZ, 0.25 / h), JOINT_DAMPING_RATIO, h)
         for _ in range(self.settings.substeps):
             states.integrate_velocities(gravity, h)
             self.solver.solve_substep(states, h, use_bias=True)
             if self.joints or bullets:   # these stages work on the bodies themselves
                 states.write(self.bodies)
-                self.joint_solver.solve(self.bodies, self.joints, h)
+                self.joint_solver.solve(self.bodies, self.joints, h, softness=joint_softness)
                 self.integrate_positions(self.sweep_bullets(None, h), h)
+                if self.settings.solver.relax:
+                    self.joint_solver.solve(self.bodies, self.joints, h, use_bias=False)
                 states.read(self.bodies)
             else:
                 states.integrate_positions(h)

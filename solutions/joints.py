@@ -89,8 +89,17 @@ class JointSolver:
         self.warm_starting = warm_starting
         self.impulses: dict[int, float] = {}
 
-    def solve(self, bodies: list[Body], joints: list[DistanceJoint], dt: float) -> None:
-        """Apply the joint impulses of one step of ``dt`` (s) to the bodies' velocities."""
+    def solve(self, bodies: list[Body], joints: list[DistanceJoint], dt: float, use_bias: bool = True,
+              softness: tuple[float, float, float] | None = None) -> None:
+        """Apply the joint impulses of one step of ``dt`` (s) to the bodies' velocities.
+
+        The soft step (:mod:`~solutions.response.soft_step`) calls it twice per
+        sub-step: before the positions move with ``softness = (bias_rate, mass_scale,
+        impulse_scale)`` of :func:`~solutions.response.soft_step.soft_coefficients`,
+        which makes rigid joints stiff springs instead of Baumgarte rods, and after
+        with ``use_bias=False``: rigid joints without bias and without a second warm
+        start (the relax pass).  Spring joints are solved the same way in both calls.
+        """
         if not joints:
             return
         rows = []
@@ -113,12 +122,20 @@ class JointSolver:
                 gamma = dt * (c_damp + dt * k_spring)
                 gamma = 1.0 / gamma if gamma > 0 else 0.0
                 bias = error * dt * k_spring * gamma
+            elif not use_bias:
+                gamma, bias = 0.0, 0.0
+            elif softness is not None:
+                # -m mass_scale (v + bias_rate C) - impulse_scale P, written as
+                # -m' (v + bias + gamma P) with m' = m mass_scale, gamma = impulse_scale / m'.
+                bias_rate, mass_scale, impulse_scale = softness
+                gamma, bias = impulse_scale * inverse / mass_scale, bias_rate * error
             else:
                 gamma, bias = 0.0, self.baumgarte / dt * error
-            mass = 1.0 / (inverse + gamma)
-            accumulated = self.impulses.get(k, 0.0) if self.warm_starting else 0.0
+            mass = 1.0 / (inverse + gamma) if softness is None or not use_bias or joint.frequency > 0 \
+                else softness[1] / inverse
+            accumulated = self.impulses.get(k, 0.0) if (self.warm_starting or not use_bias) else 0.0
             rows.append([a, b, ux, uy, rax, ray, rbx, rby, mass, bias, gamma, accumulated, k])
-            if accumulated:
+            if accumulated and use_bias:
                 self._apply(a, b, ux * accumulated, uy * accumulated, rax, ray, rbx, rby)
         for _ in range(self.iterations):
             for row in rows:

@@ -51,8 +51,11 @@ def lcp_by_enumeration(k, b):
         scale = 1e-12 * (1.0 + np.abs(b).max())
         inactive = [i for i in range(2) if i not in active]
         if np.all(x >= -scale) and np.all(v[inactive] >= -scale):
-            if not any(np.allclose(x, other, rtol=1e-9, atol=scale) for other in found):
-                found.append(x)   # b = 0, say, fits several sets with the same x
+            # b = 0, say, fits several sets with the same x; a b of a few 1e-13 lets rounding
+            # accept two sets whose x differ by about |b| / det K: the same solution.
+            same = 1e-9 * (1.0 + np.abs(b).max() / min(k[0, 0], k[1, 1]))
+            if not any(np.allclose(x, other, rtol=1e-9, atol=same) for other in found):
+                found.append(x)
     return found
 
 

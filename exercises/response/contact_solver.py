@@ -166,7 +166,7 @@ class SolverSettings:
     block_solver: bool = True
     order: str = "auto"
     max_push_velocity: float = 3.0
-    contact_hertz: float = 30.0
+    contact_hertz: float = math.inf
     contact_damping_ratio: float = 10.0
     relax: bool = True
 

@@ -55,7 +55,13 @@ import numpy as np
 
 from ..body import Body
 from ..contact import Contact
-from .contact_solver import ContactSolver, PreparedContacts
+from .contact_solver import MAX_CONDITION_NUMBER, ContactSolver, block_normal_impulses
+
+
+#: Rigid distance joints in the soft step are springs of this frequency (Hz, capped at
+#: a quarter of the sub-step rate) and damping ratio: Box2D v3's joint softness.
+JOINT_HERTZ = 60.0
+JOINT_DAMPING_RATIO = 2.0
 
 
 def soft_coefficients(hertz: float, damping_ratio: float, h: float) -> tuple[float, float, float]:
@@ -215,8 +221,17 @@ class SoftStepSolver(ContactSolver):
         for _, _, contact in manifolds:
             k = first
             first += len(contact.points)
-            self._program.append((int(c.a[k]), int(c.b[k]), float(nx[k]), float(ny[k]), float(c.ima[k]),
-                                  float(c.imb[k]), float(c.iia[k]), float(c.iib[k]), columns[k:first]))
+            ima, imb, iia, iib = float(c.ima[k]), float(c.imb[k]), float(c.iia[k]), float(c.iib[k])
+            block = None
+            if settings.block_solver and first - k == 2:
+                # K = J M^-1 J^T of the two normal rows, as in ContactSolver's block solver.
+                k11 = ima + imb + iia * rn_a[k] ** 2 + iib * rn_b[k] ** 2
+                k22 = ima + imb + iia * rn_a[k + 1] ** 2 + iib * rn_b[k + 1] ** 2
+                k12 = ima + imb + iia * rn_a[k] * rn_a[k + 1] + iib * rn_b[k] * rn_b[k + 1]
+                if max(k11, k22) ** 2 < MAX_CONDITION_NUMBER * (k11 * k22 - k12 * k12):
+                    block = (k11, k12, k22)
+            self._program.append((int(c.a[k]), int(c.b[k]), float(nx[k]), float(ny[k]), ima, imb, iia, iib,
+                                  columns[k:first], block))
 
     def separations(self, states: BodyStates) -> np.ndarray:
         """Separation (m, < 0 overlapping) of each contact point now, per point in
@@ -283,14 +298,14 @@ class SoftStepSolver(ContactSolver):
             if bounce.any():
                 velocity = soft_sweeps(states.velocity[self._rows], self._program, 1, c.normal_total,
                                        c.tangent_total, -c.restitution * c.normal_velocity, bounce.astype(float),
-                                       np.zeros(c.point_count), friction=False)
+                                       np.zeros(c.point_count), friction=False, block=False)
                 states.velocity[self._rows] = velocity * states.dynamic[self._rows, None]
         self.end_contacts(c, h)
 
 
 def soft_sweeps(velocity: np.ndarray, program: list, iterations: int, normal_total: np.ndarray,
                 tangent_total: np.ndarray, target: np.ndarray, mass_scale: np.ndarray,
-                impulse_scale: np.ndarray, friction: bool) -> np.ndarray:
+                impulse_scale: np.ndarray, friction: bool, block: bool = True) -> np.ndarray:
     """Sweeps of soft sequential impulses, manifold by manifold.
 
     Per point ``k`` the normal impulse change is ``m_n mass_scale[k] (target[k] - v_n)
@@ -300,13 +315,21 @@ def soft_sweeps(velocity: np.ndarray, program: list, iterations: int, normal_tot
     :func:`~solutions.response.contact_solver.sweep_loop`; ``mass_scale = 0`` leaves a
     point out.
 
+    With ``block``, a manifold that carries its 2x2 matrix ``K`` solves its two normal
+    impulses together: when ``mass_scale + impulse_scale = 1`` (every soft or rigid
+    point) one update above is ``P_new = mass_scale x``, where ``x`` is the impulse
+    that would bring the point exactly to its target, so the pair takes
+    ``P_new = mass_scale * x`` with ``x`` from the 2x2 complementarity problem of
+    :func:`~solutions.response.contact_solver.block_normal_impulses`.
+
     Parameters
     ----------
     velocity : numpy.ndarray, shape (n, 3)
         Rows ``(vx, vy, w)`` (m/s, rad/s).
     program : list
-        Per manifold ``(a, b, nx, ny, 1/m_A, 1/m_B, 1/I_A, 1/I_B, points)`` with points
-        ``(k, r_A x n, r_B x n, r_A x t, r_B x t, m_n, m_t, mu)``.
+        Per manifold ``(a, b, nx, ny, 1/m_A, 1/m_B, 1/I_A, 1/I_B, points, K)`` with points
+        ``(k, r_A x n, r_B x n, r_A x t, r_B x t, m_n, m_t, mu)`` and ``K = (k11, k12,
+        k22)`` (1/kg) for a two-point manifold solved as a block, else None.
     iterations : int
         Sweeps.
     normal_total, tangent_total : numpy.ndarray, shape (m,)
@@ -317,6 +340,9 @@ def soft_sweeps(velocity: np.ndarray, program: list, iterations: int, normal_tot
         Soft-constraint scales (dimensionless).
     friction : bool
         Solve the tangent impulses too.
+    block : bool
+        Use the manifolds' ``K`` (False: point by point, needed when a ``mass_scale``
+        masks points out).
 
     Returns
     -------
@@ -326,7 +352,7 @@ def soft_sweeps(velocity: np.ndarray, program: list, iterations: int, normal_tot
     --------
     A 1 kg disc falling at 1 m/s on static ground, rigid: one sweep stops it.
 
-    >>> program = [(0, 1, 0.0, 1.0, 0.0, 1.0, 0.0, 2.0, [(0, 0.0, 0.0, 0.0, 0.5, 1.0, 1 / 1.5, 0.0)])]
+    >>> program = [(0, 1, 0.0, 1.0, 0.0, 1.0, 0.0, 2.0, [(0, 0.0, 0.0, 0.0, 0.5, 1.0, 1 / 1.5, 0.0)], None)]
     >>> soft_sweeps(np.array([[0.0, 0.0, 0.0], [0.0, -1.0, 0.0]]), program, 1, np.zeros(1), np.zeros(1),
     ...             np.zeros(1), np.ones(1), np.zeros(1), friction=True).tolist()
     [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
@@ -335,9 +361,33 @@ def soft_sweeps(velocity: np.ndarray, program: list, iterations: int, normal_tot
     normal, tangent = normal_total.tolist(), tangent_total.tolist()
     target, mass_scale, impulse_scale = target.tolist(), mass_scale.tolist(), impulse_scale.tolist()
     for _ in range(iterations):
-        for a, b, nx, ny, ima, imb, iia, iib, points in program:
+        for a, b, nx, ny, ima, imb, iia, iib, points, matrix in program:
             vxa, vya, wa, vxb, vyb, wb = vx[a], vy[a], w[a], vx[b], vy[b], w[b]
-            for k, rn_a, rn_b, _, _, mass_normal, _, _ in points:
+            if block and matrix is not None:
+                (k1, rn_a1, rn_b1, *_), (k2, rn_a2, rn_b2, *_) = points
+                k11, k12, k22 = matrix
+                along = (vxb - vxa) * nx + (vyb - vya) * ny
+                old1, old2 = normal[k1], normal[k2]
+                b1 = along + wb * rn_b1 - wa * rn_a1 - target[k1] - (k11 * old1 + k12 * old2)
+                b2 = along + wb * rn_b2 - wa * rn_a2 - target[k2] - (k12 * old1 + k22 * old2)
+                x1, x2 = block_normal_impulses(k11, k12, k22, b1, b2)
+                if x1 != x1:  # nan: no case fits (rounding); keep the impulses
+                    x1, x2 = old1, old2
+                else:
+                    x1, x2 = mass_scale[k1] * x1, mass_scale[k2] * x2
+                change1, change2 = x1 - old1, x2 - old2
+                normal[k1], normal[k2] = x1, x2
+                change = change1 + change2
+                vxa -= ima * change * nx
+                vya -= ima * change * ny
+                wa -= iia * (rn_a1 * change1 + rn_a2 * change2)
+                vxb += imb * change * nx
+                vyb += imb * change * ny
+                wb += iib * (rn_b1 * change1 + rn_b2 * change2)
+                points_by_one = ()
+            else:
+                points_by_one = points
+            for k, rn_a, rn_b, _, _, mass_normal, _, _ in points_by_one:
                 normal_velocity = (vxb - vxa) * nx + (vyb - vya) * ny + wb * rn_b - wa * rn_a
                 old = normal[k]
                 change = mass_normal * mass_scale[k] * (target[k] - normal_velocity) - impulse_scale[k] * old

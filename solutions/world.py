@@ -38,9 +38,10 @@ from .contact import Contact
 from .joints import DistanceJoint, JointSolver
 from .narrowphase.dispatch import collide
 from .narrowphase.speculative import SPECULATIVE_MARGIN, speculative_polygon_manifold
+from .narrowphase.speculative_batch import box_pose, manifolds_as_contacts, speculative_box_manifolds
 from .response.contact_solver import ContactSolver, SolverSettings
 from .response.soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, BodyStates, SoftStepSolver, soft_coefficients
-from .shapes import Circle, Shape, bounding_aabb
+from .shapes import AABB, OBB, Circle, Shape, bounding_aabb
 
 BROAD_PHASES = ("auto", "all_pairs", "brute_force", "uniform_grid", "quadtree", "numpy_grid")
 
@@ -162,24 +163,35 @@ class World:
         self.solver.begin_step(self.bodies, self.manifolds, h, separations)
         states = BodyStates(self.bodies)
         gravity = np.asarray(self.settings.gravity, dtype=float)
-        bullets = self.settings.continuous and any(b.is_bullet and not b.is_static for b in self.bodies)
         joint_softness = soft_coefficients(min(JOINT_HERTZ, 0.25 / h), JOINT_DAMPING_RATIO, h)
         for _ in range(self.settings.substeps):
             states.integrate_velocities(gravity, h)
             self.solver.solve_substep(states, h, use_bias=True)
-            if self.joints or bullets:   # these stages work on the bodies themselves
+            if self.joints:   # the joint solver works on the bodies themselves
                 states.write(self.bodies)
                 self.joint_solver.solve(self.bodies, self.joints, h, softness=joint_softness)
-                self.integrate_positions(self.sweep_bullets(None, h), h)
-                if self.settings.solver.relax:
-                    self.joint_solver.solve(self.bodies, self.joints, h, use_bias=False)
                 states.read(self.bodies)
-            else:
-                states.integrate_positions(h)
+            states.integrate_positions(h)
+            if self.joints and self.settings.solver.relax:
+                states.write(self.bodies)
+                self.joint_solver.solve(self.bodies, self.joints, h, use_bias=False)
+                states.read(self.bodies)
             self.solver.solve_substep(states, h, use_bias=False)
             self.time += h
         self.solver.end_step(states, h)
+        # Continuous detection once per step, as Box2D v3 does: a bullet whose path over
+        # the whole step crossed a static body goes back to where it first touched it;
+        # the next step's contacts turn it round.
+        starts = {k: self.bodies[k].position.copy() for k, b in enumerate(self.bodies)
+                  if b.is_bullet and not b.is_static} if self.settings.continuous else {}
         states.write(self.bodies)
+        for index, start in starts.items():
+            body = self.bodies[index]
+            move = body.position - start
+            first = self.time_of_first_hit(shapes[index], move)
+            if first < 1.0:
+                body.position = start + first * move
+                self.stats.bullets_stopped += 1
 
     # The stages -----------------------------------------------------------------
     def apply_gravity(self, h: float) -> None:
@@ -240,16 +252,29 @@ class World:
     def speculative_narrow_phase(self, shapes: list[Shape], pairs) -> tuple[list, list[np.ndarray]]:
         """Manifolds of the pairs closer than ``SPECULATIVE_MARGIN`` (polygons) or
         touching (circles), and the signed separation of every point (m, > 0 apart)."""
-        manifolds, separations = [], []
-        for i, j in pairs:
+        found = [None] * len(pairs)
+        # Box-box pairs all at once with numpy (the same answer as the loop below).
+        boxes = [k for k, (i, j) in enumerate(pairs) if isinstance(shapes[i], (AABB, OBB))
+                 and isinstance(shapes[j], (AABB, OBB))]
+        batched = set(boxes)
+        if boxes:
+            a = [box_pose(shapes[pairs[k][0]]) for k in boxes]
+            b = [box_pose(shapes[pairs[k][1]]) for k in boxes]
+            batch = speculative_box_manifolds(*(np.array(column) for column in zip(*a)),
+                                              *(np.array(column) for column in zip(*b)), SPECULATIVE_MARGIN)
+            for k, result in zip(boxes, manifolds_as_contacts(batch)):
+                found[k] = result
+        for k, (i, j) in enumerate(pairs):
             if isinstance(shapes[i], Circle) or isinstance(shapes[j], Circle):
                 contact = collide(shapes[i], shapes[j])
-                found = None if contact is None else (contact, -contact.depths)
-            else:
-                found = speculative_polygon_manifold(shapes[i], shapes[j], SPECULATIVE_MARGIN)
-            if found is not None:
-                manifolds.append((i, j, found[0]))
-                separations.append(found[1])
+                found[k] = None if contact is None else (contact, -contact.depths)
+            elif k not in batched:
+                found[k] = speculative_polygon_manifold(shapes[i], shapes[j], SPECULATIVE_MARGIN)
+        manifolds, separations = [], []
+        for (i, j), result in zip(pairs, found):
+            if result is not None:
+                manifolds.append((i, j, result[0]))
+                separations.append(result[1])
         self.stats.manifolds = len(manifolds)
         self.stats.contact_points = sum(len(c.points) for _, _, c in manifolds)
         self.stats.max_penetration = max((c.depth for _, _, c in manifolds), default=0.0)
@@ -264,26 +289,32 @@ class World:
         displacements: dict[int, np.ndarray] = {}
         if not self.settings.continuous:
             return displacements
-        statics = [k for k, b in enumerate(self.bodies) if b.is_static]
         for index, body in enumerate(self.bodies):
             if not body.is_bullet or body.is_static:
                 continue
             move = h * body.velocity
-            bullet = shapes[index] if shapes is not None else body.world_shape()
-            sweep = swept_aabb(bullet, move)
-            first = 1.0
-            for k in statics:
-                if k not in self._static_shapes:
-                    self._static_shapes[k] = self.bodies[k].world_shape()
-                box = bounding_aabb(self._static_shapes[k])
-                if np.all(box.min_corner <= sweep.max_corner) and np.all(sweep.min_corner <= box.max_corner):
-                    t = time_of_impact(bullet, move, self._static_shapes[k])
-                    if t is not None and t > 0.0:
-                        first = min(first, t)
+            first = self.time_of_first_hit(shapes[index] if shapes is not None else body.world_shape(), move)
             if first < 1.0:
                 displacements[index] = first * move
                 self.stats.bullets_stopped += 1
         return displacements
+
+    def time_of_first_hit(self, shape: Shape, move: np.ndarray) -> float:
+        """Fraction in (0, 1] of ``move`` (m) that ``shape`` travels before it first
+        touches a static body (1: it touches none on the way)."""
+        sweep = swept_aabb(shape, move)
+        first = 1.0
+        for k, body in enumerate(self.bodies):
+            if not body.is_static:
+                continue
+            if k not in self._static_shapes:
+                self._static_shapes[k] = body.world_shape()
+            box = bounding_aabb(self._static_shapes[k])
+            if np.all(box.min_corner <= sweep.max_corner) and np.all(sweep.min_corner <= box.max_corner):
+                t = time_of_impact(shape, move, self._static_shapes[k])
+                if t is not None and t > 0.0:
+                    first = min(first, t)
+        return first
 
     def integrate_positions(self, displacements: dict[int, np.ndarray], h: float) -> None:
         """x += h v (or a bullet's cut-short displacement), angle += h w."""

@@ -854,6 +854,38 @@ def block_normal_impulses(k11: float, k12: float, k22: float, b1: float, b2: flo
     return math.nan, math.nan
 
 
+def block_normal_impulses_many(k11: np.ndarray, k12: np.ndarray, k22: np.ndarray, b1: np.ndarray,
+                                b2: np.ndarray, inverse: tuple | None = None
+                                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`block_normal_impulses` for many manifolds at once (arrays of equal shape).
+
+    ``inverse``: ``K^-1`` as ``(n11, n12, n22)`` if already known.  Returns ``(x1,
+    x2, stuck)``: the impulses (N s) and where no case fits (rounding), in which
+    case ``x1``, ``x2`` are 0 there and the caller keeps its old impulses.
+
+    >>> k = np.array([2.5]), np.array([-0.5]), np.array([2.5])
+    >>> x1, x2, stuck = block_normal_impulses_many(*k, np.array([-9.81 / 60]), np.array([-9.81 / 60]))
+    >>> x1.round(12).tolist(), x2.round(12).tolist(), stuck.tolist()
+    ([0.08175], [0.08175], [False])
+    """
+    if inverse is None:
+        det = k11 * k22 - k12 * k12
+        inverse = (k22 / det, -k12 / det, k11 / det)
+    n11, n12, n22 = inverse
+    x1, x2 = -(n11 * b1 + n12 * b2), -(n12 * b1 + n22 * b2)       # case 1: both push
+    both = (x1 >= 0.0) & (x2 >= 0.0)
+    if both.all():
+        return x1, x2, np.zeros(x1.shape, dtype=bool)
+    # Cases 2-4 where case 1 does not fit; the first that fits wins.
+    only1, only2 = -b1 / k11, -b2 / k22
+    case_1 = ~both & (only1 >= 0.0) & (k12 * only1 + b2 >= 0.0)
+    case_2 = ~both & ~case_1 & (only2 >= 0.0) & (k12 * only2 + b1 >= 0.0)
+    stuck = ~(both | case_1 | case_2 | ((b1 >= 0.0) & (b2 >= 0.0)))
+    x1 = np.where(both, x1, np.where(case_1, only1, 0.0))
+    x2 = np.where(both, x2, np.where(case_2, only2, 0.0))
+    return x1, x2, stuck
+
+
 def sweep_order(body_a: np.ndarray, body_b: np.ndarray, movable: np.ndarray,
                 order: str = "manifolds") -> tuple[np.ndarray, np.ndarray]:
     """Order in which the sweeps visit the manifolds, in batches that share no movable body.
@@ -1210,18 +1242,9 @@ class _BatchGroup:
         old1, old2 = (self.normal[0], self.normal[1]) if accumulate else (0.0, 0.0)
         b1 = np.einsum("ij,ij->i", v, self.j_normal[0]) - self.target[0] - (k11 * old1 + k12 * old2)
         b2 = np.einsum("ij,ij->i", v, self.j_normal[1]) - self.target[1] - (k12 * old1 + k22 * old2)
-        n11, n12, n22 = self.inverse
-        x1, x2 = -(n11 * b1 + n12 * b2), -(n12 * b1 + n22 * b2)       # case 1: both push
-        both = (x1 >= 0.0) & (x2 >= 0.0)
-        if not both.all():
-            # Cases 2-4 where case 1 does not fit, the first that fits wins; none fits
-            # only by rounding: keep the impulses.
-            only1, only2 = -b1 / k11, -b2 / k22
-            case_1 = ~both & (only1 >= 0.0) & (k12 * only1 + b2 >= 0.0)
-            case_2 = ~both & ~case_1 & (only2 >= 0.0) & (k12 * only2 + b1 >= 0.0)
-            stuck = ~(both | case_1 | case_2 | ((b1 >= 0.0) & (b2 >= 0.0)))
-            x1 = np.where(both, x1, np.where(case_1, only1, np.where(stuck, old1, 0.0)))
-            x2 = np.where(both, x2, np.where(case_2, only2, np.where(stuck, old2, 0.0)))
+        x1, x2, stuck = block_normal_impulses_many(k11, k12, k22, b1, b2, self.inverse)
+        if stuck.any():                     # no case fits, by rounding: keep the impulses
+            x1, x2 = np.where(stuck, old1, x1), np.where(stuck, old2, x2)
         change1, change2 = x1 - old1, x2 - old2
         self.normal[0] += change1
         self.normal[1] += change2

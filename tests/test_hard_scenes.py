@@ -146,3 +146,11 @@ def test_friction_ramp_follows_coulombs_law():
             assert travelled == pytest.approx(want, rel=0.02), box.name
         else:
             assert travelled < 1e-3, box.name
+
+
+def test_demo_runs_the_recommended_settings(capsys):
+    from tools.demo import main
+    assert main(["stack_10", "--recommended", "--seconds", "0.25"]) == 0
+    out = capsys.readouterr().out
+    assert "reference: soft step, 8 sub-steps x 1 sweeps; pymunk: 10 iterations" in out
+    assert out.count("reference") == 2 and "pymunk" in out

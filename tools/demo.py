@@ -1,11 +1,13 @@
 """Simulate a named scene with the reference engine and with pymunk, and summarise both.
 
-    python -m tools.demo [SCENE] [--seconds S] [--iterations N]
+    python -m tools.demo [SCENE] [--seconds S] [--iterations N] [--recommended]
     python -m tools.demo --list
 
 Prints, for each engine: wall time per step, deepest penetration and largest drift
 seen, and the change of total energy and of linear momentum.  Both engines are
-measured by the same yardstick (:mod:`solutions.scene_metrics`).
+measured by the same yardstick (:mod:`solutions.scene_metrics`).  With
+``--recommended`` the reference engine runs the scene's recommended settings (the
+soft step for the hard scenes) and pymunk still runs ``--iterations``.
 """
 from __future__ import annotations
 
@@ -43,12 +45,13 @@ def summarise(label, bodies, gravity, run_step, steps, probe_every):
     }
 
 
-def run_scene(name: str, seconds: float | None = None, iterations: int = 10) -> list[dict]:
+def run_scene(name: str, seconds: float | None = None, iterations: int = 10,
+              recommended: bool = False) -> list[dict]:
     """Measurements of scene ``name`` for the reference engine and pymunk."""
     scene = get_scene(name)
     steps = round((seconds if seconds is not None else scene.duration) / scene.dt)
     probe_every = max(1, steps // 60)
-    world = scene.build_world(iterations=iterations)
+    world = scene.build_world(scene.recommended_settings() if recommended else None, iterations=iterations)
     rows = [summarise("reference", world.bodies, scene.gravity, lambda: world.step(scene.dt), steps, probe_every)]
     mirror_bodies = scene.make_bodies()
     space, pm_bodies = build_space(mirror_bodies, scene.gravity, iterations, world.settings.solver.slop)
@@ -75,6 +78,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("scene", nargs="?", default="stack_10", help="scene name (see --list)")
     parser.add_argument("--seconds", type=float, default=None, help="simulated time (default: the scene's)")
     parser.add_argument("--iterations", type=int, default=10, help="solver iterations for both engines")
+    parser.add_argument("--recommended", action="store_true",
+                        help="the reference engine runs the scene's recommended settings (soft step for hard scenes)")
     parser.add_argument("--list", action="store_true", help="list the scenes and exit")
     args = parser.parse_args(argv)
     if args.list:
@@ -88,8 +93,15 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     seconds = args.seconds if args.seconds is not None else scene.duration
     print(f"scene {scene.name}: {scene.description.strip().splitlines()[0]}")
-    print(f"{seconds:g} s simulated at dt = {scene.dt:.4g} s, {args.iterations} solver iterations\n")
-    print(format_rows(run_scene(args.scene, seconds, args.iterations)))
+    if args.recommended:
+        settings = scene.recommended_settings()
+        step = (f"soft step, {settings.substeps} sub-steps x {settings.solver.iterations} sweeps"
+                if settings.soft_step else f"{settings.solver.iterations} solver iterations")
+        print(f"{seconds:g} s simulated at dt = {scene.dt:.4g} s; reference: {step}; "
+              f"pymunk: {args.iterations} iterations\n")
+    else:
+        print(f"{seconds:g} s simulated at dt = {scene.dt:.4g} s, {args.iterations} solver iterations\n")
+    print(format_rows(run_scene(args.scene, seconds, args.iterations, args.recommended)))
     return 0
 
 

@@ -43,6 +43,10 @@ from .response.contact_solver import ContactSolver, SolverSettings
 from .response.soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, BodyStates, SoftStepSolver, soft_coefficients
 from .shapes import AABB, OBB, Circle, Shape, bounding_aabb
 
+#: The soft step computes box-box manifolds with numpy from this many pairs on (below
+#: it the loop over speculative_polygon_manifold is faster; the answers are the same).
+BATCH_MIN_BOX_PAIRS = 8
+
 BROAD_PHASES = ("auto", "all_pairs", "brute_force", "uniform_grid", "quadtree", "numpy_grid")
 
 
@@ -256,6 +260,8 @@ class World:
         # Box-box pairs all at once with numpy (the same answer as the loop below).
         boxes = [k for k, (i, j) in enumerate(pairs) if isinstance(shapes[i], (AABB, OBB))
                  and isinstance(shapes[j], (AABB, OBB))]
+        if len(boxes) < BATCH_MIN_BOX_PAIRS:
+            boxes = []                     # numpy's fixed cost would exceed the loop's
         batched = set(boxes)
         if boxes:
             a = [box_pose(shapes[pairs[k][0]]) for k in boxes]

@@ -301,3 +301,17 @@ def test_restitution_threshold_stops_slow_bounces_only():
         return highest[0]
     assert bounce_height(1.0) < 1e-4
     assert bounce_height(0.0) == pytest.approx(drop, rel=0.2)   # e = 1: back to where it fell from
+
+
+def test_batched_and_looped_box_manifolds_give_the_same_simulation(monkeypatch):
+    import solutions.world as world_module
+
+    def final_state():
+        _, world = scene_world("pyramid_10")
+        run(world, 0.25)
+        return np.array([[*b.position, b.angle, *b.velocity, b.angular_velocity] for b in world.bodies])
+
+    batched = final_state()
+    monkeypatch.setattr(world_module, "BATCH_MIN_BOX_PAIRS", 10**9)
+    looped = final_state()
+    np.testing.assert_allclose(batched, looped, rtol=0, atol=1e-12)

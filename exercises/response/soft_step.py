@@ -202,6 +202,10 @@ class SoftStepSolver(ContactSolver):
         self._rows = np.array(list(c.local), dtype=int)      # world index of each member
         self._start_angle = np.array([float(body.angle) for body in c.members])
         self._separation = -c.depth                            # at the poses of the start
+        nx, ny = c.normal[:, 0], c.normal[:, 1]
+        self._r_dot_n_a, self._r_dot_n_b = c.r_a[:, 0] * nx + c.r_a[:, 1] * ny, c.r_b[:, 0] * nx + c.r_b[:, 1] * ny
+        self._r_cross_n_a = c.r_a[:, 0] * ny - c.r_a[:, 1] * nx
+        self._r_cross_n_b = c.r_b[:, 0] * ny - c.r_b[:, 1] * nx
         hertz = min(settings.contact_hertz, 0.25 / h)
         soft = soft_coefficients(hertz, settings.contact_damping_ratio, h)
         stiff = soft_coefficients(2.0 * hertz, settings.contact_damping_ratio, h)
@@ -246,16 +250,12 @@ class SoftStepSolver(ContactSolver):
         c = self._contacts
         moved = states.position[self._rows] - c.centre
         turned = states.angle[self._rows] - self._start_angle
-        cos, sin = np.cos(turned), np.sin(turned)
-
-        def point_moved(rows, r):
-            """Displacement of the material point at lever arm r of body ``rows``."""
-            ca, sa = cos[rows], sin[rows]
-            return moved[rows] + np.column_stack([(ca - 1.0) * r[:, 0] - sa * r[:, 1],
-                                                  sa * r[:, 0] + (ca - 1.0) * r[:, 1]])
-
-        apart = point_moved(c.b, c.r_b) - point_moved(c.a, c.r_a)
-        return np.einsum("ij,ij->i", apart, c.normal) - c.depth
+        cos_less_1, sin = np.cos(turned) - 1.0, np.sin(turned)
+        # ((R - I) r) . n = (cos - 1) (r . n) + sin (r x n) for a turn R of the lever arm r.
+        a, b = c.a, c.b
+        return (np.einsum("ij,ij->i", moved[b] - moved[a], c.normal)
+                + cos_less_1[b] * self._r_dot_n_b + sin[b] * self._r_cross_n_b
+                - cos_less_1[a] * self._r_dot_n_a - sin[a] * self._r_cross_n_a - c.depth)
 
     def solve_substep(self, states: BodyStates, h: float, use_bias: bool) -> None:
         """One pass of ``iterations`` sweeps on ``states``: warm start and soft solve

@@ -56,9 +56,10 @@ MOMENTUM_TESTS = INELASTIC | COLLISION
 #: Tests that reach project_circle: directly, and through circle_polygon_overlap.
 PROJECT_CIRCLE = frozenset({"sat.project_circle", "sat.circle_polygon.random", "sat.circle_polygon.opposite_sides"})
 #: Tests that reach project_vertices: directly, and through the SAT tests and contacts
-#: of polygons (polygons_overlap, circle_polygon_overlap, the clipping of contacts).
+#: of polygons (polygons_overlap, obbs_overlap, circle_polygon_overlap, the clipping of contacts).
 PROJECT_VERTICES = frozenset({"sat.project_vertices", "sat.polygons_overlap.random", "sat.obb_negative_coordinates",
-                              "sat.circle_polygon.random", "sat.circle_polygon.opposite_sides"})
+                              "sat.obbs_overlap.random", "sat.circle_polygon.random",
+                              "sat.circle_polygon.opposite_sides"})
 #: Tests whose functions live in (or import) narrowphase.circle_circle.
 CIRCLE_CIRCLE = frozenset({"sat.circles_overlap", "contacts.circle_circle"})
 

@@ -131,6 +131,19 @@ def check_polygons_random(student):
                             "random boxes and polygons", st.tuples(obbs, obbs))
 
 
+@check("sat.obbs_overlap.random")
+def check_obbs_random(student):
+    # The two-axes-per-box test: random boxes, boxes left of the origin (erratum 7) and
+    # boxes touching along an edge (touching counts).
+    rng = np.random.default_rng(305)
+    pairs = [(random_obb(rng), random_obb(rng)) for _ in range(150)]
+    pairs += [(OBB((-9, -7), (1, 0.5), 0.3), OBB((-5, -7), (1, 0.5), -0.2)),
+              (OBB((-5, 0), (0.5, 0.5), 0.0), OBB((-2, 0), (0.5, 0.5), 0.0)),
+              (OBB((0, 0), (1, 1), 0.0), OBB((2, 0), (1, 1), 0.0))]
+    return compare_overlaps(student, "narrowphase.polygon_polygon", "obbs_overlap", pairs,
+                            "random oriented boxes", st.tuples(obbs, obbs))
+
+
 @check("sat.circle_polygon.opposite_sides")
 def check_circle_opposite(student):
     # Erratum 10: abs() folds projections around the origin.

@@ -36,12 +36,13 @@ effective mass.  Implicit Euler over ``h`` gives, with ``omega = 2 pi f``
     impulse_scale = 1 / (1 + h omega (2 zeta + h omega))
 
 and the normal impulse of one sweep is ``-m_n mass_scale (v_n + bias) - impulse_scale
-P_acc`` with ``bias = max(bias_rate * min(s + slop, 0), -max_push_velocity)``.  A
+P_acc`` with ``bias = max(bias_rate * s, -max_push_velocity)`` for ``s <= 0``: no
+slop, the spring itself decides how deep a loaded contact rests.  A
 point that has opened (``s > 0``) may close at up to ``s / h`` and is rigid.  Contacts
 against static bodies use twice the frequency (they must carry whole stacks).  The
 frequency is capped at a quarter of the sub-step rate, ``1 / (4 h)``, where implicit
 Euler stays accurate.  Settings: ``contact_hertz``, ``contact_damping_ratio``,
-``relax``, ``slop``, ``max_push_velocity`` and ``iterations`` (sweeps per pass) of
+``relax``, ``max_push_velocity`` and ``iterations`` (sweeps per pass) of
 :class:`~solutions.response.contact_solver.SolverSettings`.
 
 Each sweep solves every manifold's normal impulses and then its friction impulses

@@ -174,12 +174,12 @@ class World:
             if self.joints:   # the joint solver works on the bodies themselves
                 states.write(self.bodies)
                 self.joint_solver.solve(self.bodies, self.joints, h, softness=joint_softness)
+                self.integrate_positions({}, h)
+                if self.settings.solver.relax:
+                    self.joint_solver.solve(self.bodies, self.joints, h, use_bias=False)
                 states.read(self.bodies)
-            states.integrate_positions(h)
-            if self.joints and self.settings.solver.relax:
-                states.write(self.bodies)
-                self.joint_solver.solve(self.bodies, self.joints, h, use_bias=False)
-                states.read(self.bodies)
+            else:
+                states.integrate_positions(h)
             self.solver.solve_substep(states, h, use_bias=False)
             self.time += h
         self.solver.end_step(states, h)

@@ -57,8 +57,8 @@ import numpy as np
 
 from ..body import Body
 from ..contact import Contact
-from .contact_solver import (COLOURS_MIN_MANIFOLDS, MAX_CONDITION_NUMBER, ContactSolver, block_normal_impulses,
-                             block_normal_impulses_many, sweep_order)
+from .contact_solver import (COLOURS_MIN_MANIFOLDS, ContactSolver, block_is_well_conditioned, block_normal_impulses,
+                             block_normal_impulses_many, jacobian_rows, normal_block_matrix, sweep_order)
 
 
 #: Rigid distance joints in the soft step are springs of this frequency (Hz, capped at
@@ -214,17 +214,10 @@ class SoftStepSolver(ContactSolver):
         self._bias_rate, self._mass_scale, self._impulse_scale = (
             np.where(against_static, s2, s1) for s1, s2 in zip(soft, stiff))
         self._max_normal = np.zeros(c.point_count)
-        back = np.argsort(c.order)                             # sweep order -> manifold order
-        mass_normal, mass_tangent, friction = c.rows.mass_normal[back], c.rows.mass_tangent[back], c.rows.friction[back]
         # One entry per manifold: bodies, normal, inverse masses and its points
         # (index, r_A x n, r_B x n, r_A x t, r_B x t, 1/K_n, 1/K_t, mu), in manifold order.
-        nx, ny = c.normal[:, 0], c.normal[:, 1]
-        rn_a = (c.r_a[:, 0] * ny - c.r_a[:, 1] * nx).tolist()
-        rn_b = (c.r_b[:, 0] * ny - c.r_b[:, 1] * nx).tolist()
-        rt_a = (-(c.r_a[:, 0] * nx + c.r_a[:, 1] * ny)).tolist()
-        rt_b = (-(c.r_b[:, 0] * nx + c.r_b[:, 1] * ny)).tolist()
-        columns = list(zip(range(c.point_count), rn_a, rn_b, rt_a, rt_b, mass_normal.tolist(),
-                           mass_tangent.tolist(), friction.tolist()))
+        columns = list(zip(range(c.point_count), *(c.columns[name].tolist() for name in (
+            "rn_a", "rn_b", "rt_a", "rt_b", "mass_normal", "mass_tangent", "friction"))))
         self._program = []
         first = 0
         for _, _, contact in manifolds:
@@ -233,12 +226,10 @@ class SoftStepSolver(ContactSolver):
             ima, imb, iia, iib = float(c.ima[k]), float(c.imb[k]), float(c.iia[k]), float(c.iib[k])
             block = None
             if settings.block_solver and first - k == 2:
-                # K = J M^-1 J^T of the two normal rows, as in ContactSolver's block solver.
-                k11 = ima + imb + iia * rn_a[k] ** 2 + iib * rn_b[k] ** 2
-                k22 = ima + imb + iia * rn_a[k + 1] ** 2 + iib * rn_b[k + 1] ** 2
-                k12 = ima + imb + iia * rn_a[k] * rn_a[k + 1] + iib * rn_b[k] * rn_b[k + 1]
-                if max(k11, k22) ** 2 < MAX_CONDITION_NUMBER * (k11 * k22 - k12 * k12):
-                    block = (k11, k12, k22)
+                (_, rn_a1, rn_b1, *_), (_, rn_a2, rn_b2, *_) = columns[k:first]
+                matrix = normal_block_matrix(ima, imb, iia, iib, rn_a1, rn_b1, rn_a2, rn_b2)
+                if block_is_well_conditioned(*matrix):
+                    block = matrix
             self._program.append((int(c.a[k]), int(c.b[k]), float(nx[k]), float(ny[k]), ima, imb, iia, iib,
                                   columns[k:first], block))
         batched = settings.sweep == "batched" or (settings.sweep == "auto" and len(manifolds) >= COLOURS_MIN_MANIFOLDS)
@@ -476,16 +467,14 @@ class SoftGroup:
         self.entries = entries
         self.block = block
         a, b, nx, ny, ima, imb, iia, iib = (np.array([entry[f] for entry in entries]) for f in range(8))
-        self.where = np.column_stack([3 * a, 3 * a + 1, 3 * a + 2, 3 * b, 3 * b + 1, 3 * b + 2])
-        inverse_masses = np.column_stack([ima, ima, iia, imb, imb, iib])
         self.slots = []
         for slot in range(len(entries[0][8])):
             k, rn_a, rn_b, rt_a, rt_b, mass_normal, mass_tangent, mu = (
                 np.array([entry[8][slot][f] for entry in entries]) for f in range(8))
-            j_normal = np.column_stack([-nx, -ny, -rn_a, nx, ny, rn_b])
-            j_tangent = np.column_stack([-ny, nx, -rt_a, ny, -nx, rt_b])
-            self.slots.append((k.astype(int), j_normal, j_normal * inverse_masses, mass_normal, j_tangent,
-                               j_tangent * inverse_masses, mass_tangent, mu, bool(np.any(mu != 0.0))))
+            self.where, j_normal, response_normal, j_tangent, response_tangent = jacobian_rows(
+                a, b, nx, ny, rn_a, rn_b, rt_a, rt_b, ima, imb, iia, iib)      # where: same for both slots
+            self.slots.append((k.astype(int), j_normal, response_normal, mass_normal, j_tangent, response_tangent,
+                               mass_tangent, mu, bool(np.any(mu != 0.0))))
         if block:
             self.k11, self.k12, self.k22 = (np.array([entry[9][f] for entry in entries]) for f in range(3))
             det = self.k11 * self.k22 - self.k12 * self.k12

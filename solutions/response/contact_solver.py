@@ -394,17 +394,18 @@ class ContactSolver:
             self._recall_impulses(manifolds, point_keys, normal_total, tangent_total)
             normal_total *= dt_ratio
             tangent_total *= dt_ratio if settings.friction else 0.0
-        rows, order = self._sweep_rows(manifolds, local, counts, inverse_mass + inverse_inertia > 0.0,
-                                       dict(a=a, b=b, nx=nx, ny=ny, rn_a=rn_a, rn_b=rn_b, rt_a=rt_a, rt_b=rt_b,
-                                            ima=ima, imb=imb, iia=iia, iib=iib, mass_normal=mass_normal,
-                                            mass_tangent=mass_tangent, target=target, friction=friction),
+        columns = dict(a=a, b=b, nx=nx, ny=ny, rn_a=rn_a, rn_b=rn_b, rt_a=rt_a, rt_b=rt_b, ima=ima, imb=imb,
+                       iia=iia, iib=iib, mass_normal=mass_normal, mass_tangent=mass_tangent, target=target,
+                       friction=friction)
+        rows, order = self._sweep_rows(manifolds, local, counts, inverse_mass + inverse_inertia > 0.0, columns,
                                        block_solver)
         return PreparedContacts(local=local, members=members, velocity=velocity, centre=centre,
                                 inverse_inertia=inverse_inertia, a=a, b=b, normal=normal, point=point, depth=depth,
                                 r_a=r_a, r_b=r_b, ima=ima, imb=imb, iia=iia, iib=iib, restitution=restitution, normal_velocity=normal_velocity,
                                 point_keys=point_keys, normal_total=normal_total, tangent_total=tangent_total,
                                 warm_started=int(np.count_nonzero(normal_total)) if warm_start else 0,
-                                rows=rows, order=order, manifold_count=len(manifolds), point_count=point_count)
+                                columns=columns, rows=rows, order=order, manifold_count=len(manifolds),
+                                point_count=point_count)
 
     def position_bias(self, depth: np.ndarray, dt: float) -> np.ndarray:
         """Separating speed (m/s) that removes ``baumgarte`` of the overlap beyond
@@ -489,15 +490,10 @@ class ContactSolver:
         two = count == 2
         p1 = first[two]
         p2 = p1 + 1
-        ima, imb, iia, iib = (point[name][p1] for name in ("ima", "imb", "iia", "iib"))
-        rn_a1, rn_b1, rn_a2, rn_b2 = point["rn_a"][p1], point["rn_b"][p1], point["rn_a"][p2], point["rn_b"][p2]
-        k11[two] = ima + imb + iia * rn_a1 * rn_a1 + iib * rn_b1 * rn_b1
-        k22[two] = ima + imb + iia * rn_a2 * rn_a2 + iib * rn_b2 * rn_b2
-        k12[two] = ima + imb + iia * rn_a1 * rn_a2 + iib * rn_b1 * rn_b2
-        # cond(K) < MAX_CONDITION_NUMBER, tested as Box2D does (k11^2 < c det K) but with
-        # the larger diagonal entry, so that the test does not depend on the point order.
-        block = two & block_solver & (np.maximum(k11, k22) ** 2
-                                                    < MAX_CONDITION_NUMBER * (k11 * k22 - k12 * k12))
+        k11[two], k12[two], k22[two] = normal_block_matrix(
+            *(point[name][p1] for name in ("ima", "imb", "iia", "iib")),
+            point["rn_a"][p1], point["rn_b"][p1], point["rn_a"][p2], point["rn_b"][p2])
+        block = two & block_solver & block_is_well_conditioned(k11, k12, k22)
         rows = SweepRows(**point, first=first, count=count, block=block, k11=np.where(block, k11, 0.0),
                          k12=np.where(block, k12, 0.0), k22=np.where(block, k22, 0.0), bounds=bounds)
         return rows, order
@@ -704,8 +700,9 @@ class PreparedContacts:
     manifold order: bodies ``a``, ``b`` (rows), ``normal``, ``point`` (m), ``depth`` (m),
     lever arms ``r_a``, ``r_b`` (m), inverse masses and inertias of A and B, pair
     ``restitution``, ``normal_velocity`` before any impulse (m/s), warm-start keys and
-    the accumulated impulses ``normal_total``, ``tangent_total`` (N s).  ``rows`` holds
-    the same points in sweep order: ``rows.x == x[order]``.
+    the accumulated impulses ``normal_total``, ``tangent_total`` (N s).  ``columns``
+    holds the per-point arrays of :attr:`SweepRows.POINT_FIELDS` in manifold order, and
+    ``rows`` the same points in sweep order: ``rows.x == columns["x"][order]``.
     """
 
     local: dict
@@ -730,6 +727,7 @@ class PreparedContacts:
     normal_total: np.ndarray
     tangent_total: np.ndarray
     warm_started: int
+    columns: dict
     rows: "SweepRows"
     order: np.ndarray
     manifold_count: int
@@ -797,6 +795,51 @@ class SweepRows:
 
     POINT_FIELDS = ("a", "b", "nx", "ny", "rn_a", "rn_b", "rt_a", "rt_b", "ima", "imb", "iia", "iib",
                     "mass_normal", "mass_tangent", "target", "friction")
+
+
+def normal_block_matrix(ima, imb, iia, iib, rn_a1, rn_b1, rn_a2, rn_b2):
+    """``(k11, k12, k22)`` of ``K = J M^-1 J^T`` for the two normal rows of a two-point
+    manifold between bodies A and B (1/kg), from the inverse masses and inertias and
+    the points' ``r x n``; floats or arrays.
+
+    >>> normal_block_matrix(0.0, 1.0, 0.0, 6.0, 0.0, -0.5, 0.0, 0.5)
+    (2.5, -0.5, 2.5)
+    """
+    k11 = ima + imb + iia * rn_a1 * rn_a1 + iib * rn_b1 * rn_b1
+    k22 = ima + imb + iia * rn_a2 * rn_a2 + iib * rn_b2 * rn_b2
+    k12 = ima + imb + iia * rn_a1 * rn_a2 + iib * rn_b1 * rn_b2
+    return k11, k12, k22
+
+
+def block_is_well_conditioned(k11, k12, k22):
+    """cond(K) < :data:`MAX_CONDITION_NUMBER`, tested as Box2D does (k11^2 < c det K) but
+    with the larger diagonal entry, so that the answer does not depend on the point
+    order; floats or arrays.
+
+    >>> bool(block_is_well_conditioned(2.5, -0.5, 2.5)), bool(block_is_well_conditioned(1.0, 1.0, 1.0))
+    (True, False)
+    """
+    return np.maximum(k11, k22) ** 2 < MAX_CONDITION_NUMBER * (k11 * k22 - k12 * k12)
+
+
+def jacobian_rows(a, b, nx, ny, rn_a, rn_b, rt_a, rt_b, ima, imb, iia, iib) -> tuple[np.ndarray, ...]:
+    """Per point, the rows over the six velocities ``(vx_A, vy_A, w_A, vx_B, vy_B, w_B)``:
+    ``where`` (their places in ``velocity.reshape(-1)``, from the body rows ``a``,
+    ``b``), the Jacobians ``J_n`` and ``J_t`` (so that ``v_n = J_n . v``) and the
+    velocity changes per unit impulse ``M^-1 J^T``.  Returns ``(where, j_normal,
+    response_normal, j_tangent, response_tangent)``, each of shape (m, 6).
+
+    >>> where, jn, mn, jt, mt = jacobian_rows(*[np.array([x]) for x in (0, 1, 0.0, 1.0, 0.0, 0.0, 0.0, 0.5,
+    ...                                                                  0.0, 1.0, 0.0, 2.0)])
+    >>> where.tolist(), jn.tolist(), mt.tolist()
+    ([[0, 1, 2, 3, 4, 5]], [[0.0, -1.0, 0.0, 0.0, 1.0, 0.0]], [[-0.0, 0.0, 0.0, 1.0, 0.0, 1.0]])
+    """
+    zero = np.zeros_like(nx, dtype=float)
+    j_normal = np.column_stack([-nx, -ny, -rn_a, nx, ny, rn_b]) + zero[:, None]
+    j_tangent = np.column_stack([-ny, nx, -rt_a, ny, -nx, rt_b]) + zero[:, None]
+    inverse_masses = np.column_stack([ima, ima, iia, imb, imb, iib])
+    where = np.column_stack([3 * a, 3 * a + 1, 3 * a + 2, 3 * b, 3 * b + 1, 3 * b + 2])
+    return where, j_normal, j_normal * inverse_masses, j_tangent, j_tangent * inverse_masses
 
 
 def block_normal_impulses(k11: float, k12: float, k22: float, b1: float, b2: float) -> tuple[float, float]:
@@ -1126,17 +1169,8 @@ def sweep_batched(velocity: np.ndarray, rows: SweepRows, iterations: int, accumu
     [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
     """
     r = rows
-    # Per point: the Jacobian rows J over the six velocities (vx_A, vy_A, w_A, vx_B, vy_B,
-    # w_B), so that v_n = J_n . v and v_t = J_t . v, and the velocity change per unit
-    # impulse M^-1 J^T.
-    zero = np.zeros_like(r.nx)
-    jacobian_normal = np.column_stack([-r.nx, -r.ny, -r.rn_a, r.nx, r.ny, r.rn_b]) + zero[:, None]
-    jacobian_tangent = np.column_stack([-r.ny, r.nx, -r.rt_a, r.ny, -r.nx, r.rt_b]) + zero[:, None]
-    inverse_masses = np.column_stack([r.ima, r.ima, r.iia, r.imb, r.imb, r.iib])
-    response_normal = jacobian_normal * inverse_masses
-    response_tangent = jacobian_tangent * inverse_masses
-    # Where each point's six velocities sit in velocity.reshape(-1).
-    where = np.column_stack([3 * r.a, 3 * r.a + 1, 3 * r.a + 2, 3 * r.b, 3 * r.b + 1, 3 * r.b + 2])
+    where, jacobian_normal, response_normal, jacobian_tangent, response_tangent = jacobian_rows(
+        r.a, r.b, r.nx, r.ny, r.rn_a, r.rn_b, r.rt_a, r.rt_b, r.ima, r.imb, r.iia, r.iib)
 
     # Each batch splits into up to three groups: block manifolds, other two-point
     # manifolds, one-point manifolds.  A group's manifolds share no movable body, so

@@ -1,59 +1,49 @@
-"""Run a list of tests on one student package and score them.
+"""Run graded tests (pytest, with :mod:`grader.plugin`) on one student package.
 
-Every check runs in the trusted process; the student's code runs in a sandboxed
-worker (:mod:`grader.sandbox`), started once per submission and restarted after a
-crash or a timeout.  Checks that measure speed also get a second sandbox holding the
-reference engine, so that both are timed side by side in the same run.
+Every test runs in this, the trusted process; the student's code runs in a sandboxed
+worker (:mod:`grader.sandbox`) started once per run.  Tests that measure speed also
+get a second sandbox holding the reference engine, so both are timed side by side.
+pytest's own output is kept out of the way: the caller gets one
+:class:`~grader.plugin.TestResult` per test, as each finishes.
 """
 from __future__ import annotations
 
-import inspect
-import time
-import traceback
-from dataclasses import dataclass
+import contextlib
+import io
 from pathlib import Path
 
-from .checks import load_all
-from .outcome import Outcome, StudentCallFailed
-from .sandbox import Limits, Sandbox
-from .spec import TestSpec
-from .student import StudentCode
+from .outcome import Outcome
+from .plugin import GradedRun, TESTS_DIR, TestResult
+from .sandbox import Limits
+from .spec import SpecError, TestSpec
 
-REPO_ROOT = Path(__file__).resolve().parent.parent
-REFERENCE_PACKAGE = REPO_ROOT / "solutions"
+PYTEST_CONFIG = TESTS_DIR / "pytest.ini"
 
 
-@dataclass
-class TestResult:
-    """A test, what its check found, and how long it took (s)."""
+def pytest_main(arguments: list[str], plugin: GradedRun) -> tuple[int, str]:
+    """``pytest.main`` on the graded tests' own configuration, its output captured."""
+    import pytest
 
-    test: TestSpec
-    outcome: Outcome
-    seconds: float
-
-    @property
-    def score(self) -> float:
-        """Full points for a pass; for a failure, the share of right cases if the spec
-        gives this test partial credit, else nothing."""
-        if self.outcome.status == "passed":
-            return float(self.test.points)
-        if not self.test.partial_credit:
-            return 0.0
-        return round(self.test.points * max(0.0, min(1.0, self.outcome.fraction)), 6)
+    base = ["-c", str(PYTEST_CONFIG), "--rootdir", str(TESTS_DIR), "-q", "-p", "no:cacheprovider",
+            "--no-header", "--tb=no", "-p", "no:warnings"]
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text), contextlib.redirect_stderr(text):
+        try:
+            code = pytest.main(base + arguments, plugins=[plugin])
+        finally:
+            plugin.close()
+    return int(code), text.getvalue()
 
 
-def run_check(test: TestSpec, student: StudentCode, reference: StudentCode | None) -> Outcome:
-    """One check, with every failure of the student's code turned into an Outcome."""
-    check = load_all()[test.name]
-    try:
-        if "reference" in inspect.signature(check).parameters:
-            return check(student, reference=reference)
-        return check(student)
-    except StudentCallFailed as failure:
-        return failure.outcome
-    except Exception as exc:  # a bug in a check must not cost the student: say so plainly
-        detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
-        return Outcome("error", message=f"the grader itself failed on this test ({detail}); tell your instructor")
+def collect(folders: list[Path]) -> list[TestSpec]:
+    """The graded tests in ``folders``, collected without running any."""
+    run = GradedRun(collect_only=True)
+    code, text = pytest_main([str(f) for f in folders], run)
+    if code not in (0, 5) or (code == 5 and not run.specs):
+        if not run.specs:
+            raise SpecError(f"the graded tests in {', '.join(map(str, folders))} could not be collected:\n"
+                            + text[-3000:])
+    return run.specs
 
 
 def package_folder(path: Path) -> Path:
@@ -69,34 +59,28 @@ def package_folder(path: Path) -> Path:
 
 
 def run_tests(student_dir: Path, tests: list[TestSpec], limits: Limits = Limits(), slot: int = 0,
-              isolation: str = "auto", reference_dir: Path | None = REFERENCE_PACKAGE,
+              isolation: str = "auto", reference_dir: Path | None = None,
               budget_seconds: float | None = None, progress=None) -> list[TestResult]:
     """Run ``tests`` on the package in ``student_dir``; never raises for student faults.
 
-    ``budget_seconds`` bounds the whole submission: tests not started in time are
-    reported as timeouts.  ``progress(result)`` is called after each test.
+    ``budget_seconds`` bounds the whole run: tests not started in time end as
+    ``not_run``.  ``progress(result)`` is called after each test.
     """
-    started = time.perf_counter()
-    results: list[TestResult] = []
-    needs_reference = reference_dir is not None and any(
-        "reference" in inspect.signature(load_all()[t.name]).parameters for t in tests)
-    # Two sandbox users per slot: a student's fork bomb cannot starve the reference.
-    with Sandbox(package_folder(student_dir), limits, 2 * slot, isolation) as student_box:
-        reference_box = Sandbox(reference_dir, limits, 2 * slot + 1, isolation) if needs_reference else None
-        try:
-            student = StudentCode(student_box)
-            reference = StudentCode(reference_box) if reference_box else None
-            for test in tests:
-                t0 = time.perf_counter()
-                if budget_seconds is not None and t0 - started > budget_seconds:
-                    outcome = Outcome("timeout", message=f"not run: the submission used up its {budget_seconds:g} s")
-                else:
-                    outcome = run_check(test, student, reference)
-                result = TestResult(test, outcome, time.perf_counter() - t0)
-                results.append(result)
-                if progress is not None:
-                    progress(result)
-        finally:
-            if reference_box is not None:
-                reference_box.close()
-    return results
+    if not tests:
+        return []
+    run = GradedRun(package_dir=package_folder(student_dir), limits=limits, slot=slot, isolation=isolation,
+                    reference_dir=reference_dir, budget_seconds=budget_seconds, progress=progress,
+                    names={t.name for t in tests})
+    paths = sorted({t.path for t in tests})
+    code, text = pytest_main(paths, run)
+    done = {r.test.name for r in run.results}
+    missing = [t for t in tests if t.name not in done]
+    for test in missing:  # a test pytest never ran: the grader's own failure, said plainly
+        outcome = Outcome("error", message="the grader could not run this test; tell your instructor\n"
+                                           + text[-1500:])
+        result = TestResult(test, outcome, 0.0)
+        run.results.append(result)
+        if progress is not None:
+            progress(result)
+    order = {t.name: i for i, t in enumerate(tests)}
+    return sorted(run.results, key=lambda r: order.get(r.test.name, len(order)))

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from . import codec
-from .outcome import Outcome, StudentCallFailed
+from .outcome import OUTPUT_LIMIT, Outcome, StudentCallFailed, StudentCallStopped
 from .sandbox import CallResult, Sandbox
 
 STATUS_WORDS = {
@@ -68,14 +68,31 @@ class StudentCode:
         self.sandbox = sandbox
         self.package = package
         self.calls = 0
+        self._printed: list[str] = []
+        self._printed_size = 0
+
+    def take_output(self) -> str:
+        """What the student's code printed since the last call of this (capped)."""
+        text = "".join(self._printed)
+        self._printed.clear()
+        self._printed_size = 0
+        return text
+
+    def _keep_output(self, output: str) -> None:
+        room = OUTPUT_LIMIT - self._printed_size
+        if output and room > 0:
+            self._printed.append(output[:room])
+            self._printed_size += min(room, len(output))
 
     def raw(self, module: str, function: str, *args, timeout: float | None = None, repeat: int = 1,
             batch: bool = False) -> CallResult:
         """The call's result whatever its status."""
         self.calls += 1
         encoded = [[encode(a) for a in one] for one in args[0]] if batch else [encode(a) for a in args]
-        return self.sandbox.call(f"{self.package}.{module}", function, encoded, timeout=timeout,
-                                 repeat=repeat, batch=batch)
+        result = self.sandbox.call(f"{self.package}.{module}", function, encoded, timeout=timeout,
+                                   repeat=repeat, batch=batch)
+        self._keep_output(result.output)
+        return result
 
     def call(self, module: str, function: str, *args, timeout: float | None = None) -> Any:
         """The returned value (plain data), or StudentCallFailed explaining what went wrong."""
@@ -102,10 +119,15 @@ class StudentCode:
 
     @staticmethod
     def value_of(result: CallResult, name: str) -> Any:
+        """The value of a call; a not-implemented, timed-out or crashed call stops the
+        test (StudentCallStopped), any other failure fails it (StudentCallFailed)."""
         if result.ok:
             return result.value
         status, words = STATUS_WORDS.get(result.status, ("error", result.status))
         detail = "" if result.status == "not_implemented" else f"\n{result.message}".rstrip()
         if result.output:
             detail += f"\nyour code printed:\n{shown_output(result.output)}"
-        raise StudentCallFailed(Outcome(status, message=f"{name}: {words}{detail}"))
+        outcome = Outcome(status, message=f"{name}: {words}{detail}")
+        if status in ("not_implemented", "timeout", "crashed"):
+            raise StudentCallStopped(outcome)
+        raise StudentCallFailed(outcome)

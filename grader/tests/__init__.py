@@ -1,0 +1,1 @@
+"""Graded tests: ``public/`` (students hold them) and ``hidden/`` (instructor only)."""

@@ -38,6 +38,8 @@ import textwrap
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .outcome import STATUS_MEANINGS
+
 REPO_ROOT = Path(__file__).resolve().parent.parent
 PACKAGE_VARIABLE = "GRADER_CHECK_PACKAGE"
 #: Folder (under the system's temporary folder) where the shell command saves pictures.
@@ -52,10 +54,11 @@ LABELS = {
     "timeout": ("TIMEOUT", "#bc4c00", "33"),
     "crashed": ("CRASHED", "#bc4c00", "33"),
     "forbidden": ("FORBIDDEN", "#8250df", "35"),
+    "not_run": ("NOT RUN", "#6e7781", "90"),
 }
-STATUS_WORDS = {"passed": "passed", "failed": "failed", "not_implemented": "not implemented yet",
-                "error": "raised an error", "timeout": "timed out", "crashed": "crashed", "forbidden": "forbidden"}
-NOT_IMPLEMENTED = re.compile(r"^(?P<module>[\w.]+)\.(?P<function>\w+): not implemented yet$")
+STATUS_WORDS = {status: meaning.split(":")[0] for status, meaning in STATUS_MEANINGS.items()}
+NOT_IMPLEMENTED = re.compile(r"^(?P<module>[\w.]+)\.(?P<function>\w+): not implemented yet"
+                             r"(: (?P<stub>[\w.<>]+) in (?P<file>[\w./]+\.py))?$")
 
 
 class CheckError(ValueError):
@@ -82,6 +85,8 @@ class CheckRow:
     figure: dict | None = None
     figure_path: Path | None = None
     metrics: dict = field(default_factory=dict)
+    #: What the student's code printed during the test (capped).
+    output: str = ""
 
     @property
     def passed(self) -> bool:
@@ -229,13 +234,21 @@ def student_message(row: CheckRow) -> str:
     message = row.message.strip()
     if row.status == "not_implemented":
         match = NOT_IMPLEMENTED.match(message)
+        if match and match["stub"]:
+            return (f"not implemented yet: write {match['stub']}() in exercises/{match['file']} "
+                    f"(it still raises NotImplementedError; {match['function']}() calls it)"
+                    if match["stub"].rsplit(".", 1)[-1] != match["function"] else
+                    f"not implemented yet: write {match['stub']}() in exercises/{match['file']} "
+                    "(it still raises NotImplementedError)")
         if match:
             module, function = match["module"], match["function"]
             return (f"not implemented yet: write {function}() in exercises/{module.replace('.', '/')}.py "
                     "(it still raises NotImplementedError)")
         return message if "not implemented yet" in message else f"not implemented yet: {message}"
     if not message:
-        return STATUS_WORDS.get(row.status, row.status)
+        message = STATUS_WORDS.get(row.status, row.status)
+    if row.output.strip():
+        message += "\nyour code printed:\n" + row.output.rstrip()
     return message
 
 
@@ -334,7 +347,8 @@ def row_of(result) -> CheckRow:
     test, outcome = result.test, result.outcome
     return CheckRow(name=test.name, title=test.title, exercise=test.exercise, status=outcome.status,
                     score=result.score, points=test.points, message=outcome.message or "",
-                    seconds=result.seconds, figure=outcome.figure, metrics=dict(outcome.metrics or {}))
+                    seconds=result.seconds, figure=outcome.figure, metrics=dict(outcome.metrics or {}),
+                    output=outcome.output or "")
 
 
 def run_check(exercise: str | None = None, package: str | Path | None = None, progress=None) -> CheckReport:

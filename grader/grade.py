@@ -143,11 +143,6 @@ def _die_with_parent() -> None:
         pass
 
 
-def _outcome_data(outcome: Outcome) -> dict:
-    return {"status": outcome.status, "fraction": float(outcome.fraction), "message": outcome.message,
-            "figure": outcome.figure, "metrics": outcome.metrics}
-
-
 def worker_main() -> int:
     """A grading worker: import the checks, read a config line, then one job per line.
 
@@ -170,10 +165,7 @@ def worker_main() -> int:
         channel.write(json.dumps(event, allow_nan=True, default=str) + "\n")
         channel.flush()
 
-    from .checks import load_all  # the slow part: imported while the parent loads the spec
-    from .run import run_tests
-
-    load_all()
+    from .run import run_tests  # the slow part (pytest): imported while the parent loads the spec
     line = sys.stdin.readline()
     if not line:
         os._exit(0)  # the parent found nothing to grade
@@ -197,7 +189,7 @@ def worker_main() -> int:
 
                 def progress(result, done=done):
                     send({"event": "test", "job": number, "index": next(done),
-                          "outcome": _outcome_data(result.outcome), "seconds": result.seconds})
+                          "outcome": result.outcome.to_dict(), "seconds": result.seconds})
 
                 run_tests(package, [tests[i] for i in indices], limits, slot, config["isolation"],
                           budget_seconds=job["budget"], progress=progress)
@@ -547,7 +539,7 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
 def _finish(job: Job, elapsed: float, tests: list[TestSpec], digest: str, out_dir: Path, html: bool,
             warn: Callable[[str], None]) -> dict:
     """Write a finished job's results.json (and report); its summary row."""
-    from .run import TestResult
+    from .plugin import TestResult
 
     submission = job.submission
     results_path = out_dir / submission.id / RESULTS_NAME
@@ -718,8 +710,7 @@ def _handle_event(worker: Worker, event: dict, per_test_seconds: float,
     elif kind == "test":
         index = int(event["index"])
         data = event["outcome"]
-        outcome = Outcome(str(data["status"]), float(data.get("fraction", 0.0)), str(data.get("message", "")),
-                          data.get("figure"), dict(data.get("metrics") or {}))
+        outcome = Outcome.from_dict(data if isinstance(data, dict) else {})
         job.outcomes[index] = (outcome, float(event.get("seconds", 0.0)))
         if index in job.remaining:
             job.remaining.remove(index)

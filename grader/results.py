@@ -36,22 +36,14 @@ import time
 from pathlib import Path
 from typing import Any
 
-from .outcome import Outcome
+from .outcome import STATUS_MEANINGS, Outcome
 from .spec import VISIBILITIES, TestSpec
 
 #: Gradescope's test statuses.
 GRADESCOPE_STATUSES = ("passed", "failed")
 #: The first words of a test's output for each status of :mod:`grader.outcome`.
-STATUS_WORDS = {
-    "passed": "Passed",
-    "failed": "Wrong answer",
-    "not_implemented": "Not implemented yet",
-    "error": "Error",
-    "timeout": "Timeout",
-    "crashed": "Crashed",
-    "forbidden": "Forbidden",
-    "not_run": "Not run",
-}
+STATUS_WORDS = {status: meaning.split(":")[0].capitalize() for status, meaning in STATUS_MEANINGS.items()}
+STATUS_WORDS["failed"] = "Wrong answer"
 #: Characters of one test's output kept (Gradescope shows it in a collapsed <pre>).
 OUTPUT_LIMIT = 12_000
 #: Largest figure (characters of JSON) kept in a test's extra_data.
@@ -132,6 +124,9 @@ def student_output(outcome: Outcome, score: float, max_score: float) -> str:
     if message:
         lines.append(message)
     lines += format_metrics(plain(outcome.metrics or {}))
+    printed = (getattr(outcome, "output", "") or "").rstrip()
+    if printed:
+        lines.append("Your code printed:\n" + printed)
     text = "\n".join(lines)
     if len(text) > OUTPUT_LIMIT:
         text = text[:OUTPUT_LIMIT] + f"\n[... {len(text) - OUTPUT_LIMIT} more characters not shown]"
@@ -149,9 +144,15 @@ def _figure(figure: dict | None) -> dict | None:
 
 
 def results_entry(test: TestSpec, outcome: Outcome, seconds: float = 0.0) -> dict:
-    """One entry of ``tests``: Gradescope's keys plus ``extra_data`` for the reports."""
+    """One entry of ``tests``: Gradescope's keys plus ``extra_data`` for the reports.
+
+    The score follows the test's credit rule (:attr:`grader.plugin.TestResult.score`):
+    full points for a pass, partial points only for a test marked partial_credit.
+    """
+    from .plugin import TestResult
+
     fraction = max(0.0, min(1.0, float(outcome.fraction)))
-    score = round(test.points * fraction, 6)
+    score = round(TestResult(test, outcome, seconds).score, 6)
     return {
         "name": test.title,
         "score": score,
@@ -169,6 +170,7 @@ def results_entry(test: TestSpec, outcome: Outcome, seconds: float = 0.0) -> dic
             "seconds": round(float(seconds), 4),
             "metrics": plain(outcome.metrics or {}),
             "figure": _figure(outcome.figure),
+            "printed": (getattr(outcome, "output", "") or "")[:OUTPUT_LIMIT],
             "leaderboard": test.leaderboard,
         },
     }

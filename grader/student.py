@@ -124,9 +124,11 @@ class StudentCode:
         if result.ok:
             return result.value
         status, words = STATUS_WORDS.get(result.status, ("error", result.status))
-        detail = "" if result.status == "not_implemented" else f"\n{result.message}".rstrip()
-        if result.output:
-            detail += f"\nyour code printed:\n{shown_output(result.output)}"
+        if result.status == "not_implemented":
+            stub = result.message.partition("not implemented yet: ")[2].strip()
+            detail = f": {stub}" if stub else ""
+        else:
+            detail = f"\n{result.message}".rstrip()
         outcome = Outcome(status, message=f"{name}: {words}{detail}")
         if status in ("not_implemented", "timeout", "crashed"):
             raise StudentCallStopped(outcome)

@@ -83,6 +83,24 @@ def short_traceback(exc: BaseException) -> str:
     return capped(lines + text)
 
 
+def stub_named(exc: BaseException) -> str:
+    """Where a NotImplementedError was raised, as ``"Quadtree.insert in broadphase/quadtree.py"``:
+    the stub to write, which may be a method the called function uses."""
+    frame = None
+    tb = exc.__traceback__
+    while tb is not None:
+        frame = tb.tb_frame
+        tb = tb.tb_next
+    if frame is None:
+        return "not implemented yet"
+    code = frame.f_code
+    name = getattr(code, "co_qualname", code.co_name)
+    parts = os.path.normpath(code.co_filename).split(os.sep)
+    where = "/".join(parts[parts.index("exercises") + 1:]) if "exercises" in parts else os.path.basename(
+        code.co_filename)
+    return f"not implemented yet: {name} in {where}"
+
+
 def capped(text: str, limit: int = MESSAGE_LIMIT) -> str:
     text = str.__str__(text) if isinstance(text, str) else "(not a text)"
     if len(text) <= limit:
@@ -147,8 +165,8 @@ class Worker:
             else:
                 for _ in range(int(request.get("repeat", 1))):
                     value = target(*args, **kwargs)
-        except NotImplementedError:
-            return {"status": "not_implemented", "message": "not implemented yet"}
+        except NotImplementedError as exc:
+            return {"status": "not_implemented", "message": capped(stub_named(exc))}
         except RecursionError as exc:
             return {"status": "error", "message": "recursion limit reached: " + short_traceback(exc)}
         except MemoryError:

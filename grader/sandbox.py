@@ -17,7 +17,9 @@ Isolation, strongest available first:
   process limit, which would count every process of that user.
 
 Both apply resource limits (CPU seconds, address space, file size, processes, no core
-files) and a wall-clock timeout per call.  Only JSON crosses: requests on the worker's
+files), a wall-clock timeout per call, and a seccomp filter (:mod:`grader.seccomp`)
+that refuses the system calls student code has no need of: the kernel keyring (a
+channel between submissions), new namespaces, mounts, tracing, BPF, ``memfd_create``.  Only JSON crosses: requests on the worker's
 standard input, responses on a pipe whose descriptor is its first argument; its standard output is discarded
 (printed text is captured per call by the worker and returned, capped).  The parent
 measures elapsed time itself.  A crash, hang or exception costs that call only: the
@@ -54,10 +56,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from . import codec
+from . import codec, seccomp
 
 HERE = Path(__file__).resolve().parent
 WORKER_FILES = ("worker.py", "codec.py", "scene_driver.py")
+#: The worker's seccomp filter (None off x86-64, where the sandbox runs without one).
+SECCOMP_PROGRAM = seccomp.filter_program()
 SANDBOX_MOUNT = "/sandbox"
 #: First uid of the unprivileged users the workers run as (one per parallel slot).
 SANDBOX_UID_BASE = 61000
@@ -307,6 +311,7 @@ class Sandbox:
         self._responses = None
         self._stderr: list[str] = []
         self._next_id = 0
+        self._seccomp_fd: int | None = None
         self._worker_pid: int | None = None
         self._buffer = bytearray()
         self.restarts = 0
@@ -360,6 +365,8 @@ class Sandbox:
                 "--proc", "/proc", "--dev", "/dev",
                 "--unshare-pid", "--unshare-net", "--unshare-ipc", "--unshare-uts", "--unshare-cgroup-try",
                 "--die-with-parent", "--new-session", "--hostname", "sandbox"]
+        if self._seccomp_fd is not None:
+            cmd += ["--seccomp", str(self._seccomp_fd)]
         drop = ["setpriv", f"--reuid={self.uid}", f"--regid={self.uid}", "--clear-groups", "--no-new-privs",
                 "--bounding-set=-all", "--inh-caps=-all"]
         return cmd + ["--", *drop, *python]
@@ -386,6 +393,8 @@ class Sandbox:
                 os.setgroups([])
                 os.setgid(self.uid)
                 os.setuid(self.uid)
+        if self.isolation == "plain" and SECCOMP_PROGRAM is not None:
+            seccomp.install(SECCOMP_PROGRAM)
 
     def start(self) -> None:
         """Start (or restart) the worker process."""
@@ -395,10 +404,24 @@ class Sandbox:
         read_end, write_end = os.pipe()
         self._response_fd_in_child = write_end
         self._stderr = []
-        self.process = subprocess.Popen(
-            self._command(), cwd=self.workdir, env=self._environment(), stdin=subprocess.PIPE,
-            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, pass_fds=(write_end,),
-            preexec_fn=self._limit_resources, start_new_session=True)
+        passed = [write_end]
+        self._seccomp_fd = None
+        if self.isolation == "bwrap" and SECCOMP_PROGRAM is not None:
+            # bubblewrap reads the filter from a descriptor and loads it just before exec.
+            filter_read, filter_write = os.pipe()
+            os.write(filter_write, SECCOMP_PROGRAM)
+            os.close(filter_write)
+            self._seccomp_fd = filter_read
+            passed.append(filter_read)
+        try:
+            self.process = subprocess.Popen(
+                self._command(), cwd=self.workdir, env=self._environment(), stdin=subprocess.PIPE,
+                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, pass_fds=tuple(passed),
+                preexec_fn=self._limit_resources, start_new_session=True)
+        finally:
+            if self._seccomp_fd is not None:
+                os.close(self._seccomp_fd)
+                self._seccomp_fd = None
         os.close(write_end)
         self._response_fd = read_end
         self._buffer = bytearray()

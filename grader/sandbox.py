@@ -57,6 +57,7 @@ from pathlib import Path
 from typing import Any
 
 from . import codec, seccomp
+from .memory_cage import MemoryCage
 
 HERE = Path(__file__).resolve().parent
 WORKER_FILES = ("worker.py", "codec.py", "scene_driver.py")
@@ -93,6 +94,12 @@ class Limits:
         Largest file the worker may write (RLIMIT_FSIZE).
     processes : int
         Processes and threads of the worker's user (RLIMIT_NPROC).
+    total_memory_bytes : int
+        Memory of every process of the sandbox together, tmpfs included (a memory
+        cgroup, :mod:`grader.memory_cage`, where one can be made).
+    disk_bytes : int
+        Size of each writable folder of the bubblewrap sandbox (``/sandbox``, ``/tmp``:
+        size-limited tmpfs); the student's package is mounted read-only.
     """
 
     call_timeout: float = 10.0
@@ -100,6 +107,8 @@ class Limits:
     memory_bytes: int = 2 * 1024**3
     file_bytes: int = 16 * 1024**2
     processes: int = 64
+    total_memory_bytes: int = 3 * 1024**3
+    disk_bytes: int = 64 * 1024**2
 
 
 @dataclass
@@ -312,6 +321,7 @@ class Sandbox:
         self._stderr: list[str] = []
         self._next_id = 0
         self._seccomp_fd: int | None = None
+        self._cage: MemoryCage | None = None
         self._worker_pid: int | None = None
         self._buffer = bytearray()
         self.restarts = 0
@@ -350,7 +360,9 @@ class Sandbox:
         if self.isolation == "plain":
             return python
         # The empty /tmp comes first: a Python or checkout under /tmp is bound into it below.
-        cmd = ["bwrap", "--tmpfs", "/tmp"]
+        # Writable folders are size-limited tmpfs: the disk a submission can fill.
+        disk = str(self.limits.disk_bytes)
+        cmd = ["bwrap", "--perms", "1777", "--size", disk, "--tmpfs", "/tmp"]
         folders = [f for f in ["/usr", "/bin", "/lib", "/lib64", "/lib32", "/sbin", *python_folders()] if os.path.isdir(f)]
         # Parents that bwrap would create root-only: make them traversable by the worker's user.
         parents = sorted({str(p) for f in folders for p in Path(f).parents if str(p) != "/"}, key=len)
@@ -361,7 +373,10 @@ class Sandbox:
         for name in ["/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/ld.so.conf.d", "/etc/localtime"]:
             if os.path.exists(name):
                 cmd += ["--ro-bind", name, name]
-        cmd += ["--bind", str(self.workdir), SANDBOX_MOUNT, "--chdir", SANDBOX_MOUNT,
+        cmd += ["--perms", "0777", "--size", disk, "--tmpfs", SANDBOX_MOUNT]
+        for name in ("exercises", ".grader"):
+            cmd += ["--ro-bind", str(self.workdir / name), f"{SANDBOX_MOUNT}/{name}"]
+        cmd += ["--chdir", SANDBOX_MOUNT,
                 "--proc", "/proc", "--dev", "/dev",
                 "--unshare-pid", "--unshare-net", "--unshare-ipc", "--unshare-uts", "--unshare-cgroup-try",
                 "--die-with-parent", "--new-session", "--hostname", "sandbox"]
@@ -383,6 +398,8 @@ class Sandbox:
     def _limit_resources(self) -> None:
         """Runs in the child between fork and exec."""
         limits = self.limits
+        if self._cage is not None:
+            self._cage.join()
         resource.setrlimit(resource.RLIMIT_CPU, (limits.cpu_seconds, limits.cpu_seconds))
         resource.setrlimit(resource.RLIMIT_AS, (limits.memory_bytes, limits.memory_bytes))
         resource.setrlimit(resource.RLIMIT_FSIZE, (limits.file_bytes, limits.file_bytes))
@@ -401,6 +418,8 @@ class Sandbox:
         self._kill()
         if self.workdir is None:
             self._prepare()
+        if self._cage is None and (os.geteuid() == 0 or self.isolation == "plain"):
+            self._cage = MemoryCage.create(self.limits.total_memory_bytes, f"grader-sandbox-{self.slot}")
         read_end, write_end = os.pipe()
         self._response_fd_in_child = write_end
         self._stderr = []
@@ -463,6 +482,9 @@ class Sandbox:
     def close(self) -> None:
         """Kill the worker (and everything it started), delete its folder, free its user."""
         self._kill()
+        if self._cage is not None:
+            self._cage.close()
+            self._cage = None
         if self.workdir is not None:
             shutil.rmtree(self.workdir, ignore_errors=True)
             self.workdir = None

@@ -24,6 +24,45 @@ def loud():
 def stub():
     raise NotImplementedError
 
+def fill_disk():
+    # Files of 8 MB each (under the per-file limit) until the folder is full.
+    written = 0
+    try:
+        for n in range(40):
+            with open(f"fill{n}.bin", "wb") as handle:
+                handle.write(b"x" * 8_000_000)
+            written += 8_000_000
+    except OSError as exc:
+        return [written, exc.errno]
+    return [written, 0]
+
+def write_own_package():
+    try:
+        with open("exercises/hostile.py", "a") as handle:
+            handle.write("# changed")
+        return "changed"
+    except OSError as exc:
+        return exc.errno
+
+def hogs_together(children, megabytes):
+    # Each child stays under the per-process limit; together they pass the total.
+    import signal
+    pids = []
+    for _ in range(children):
+        pid = os.fork()
+        if pid == 0:
+            block = bytearray(megabytes * 1024 * 1024)
+            for i in range(0, len(block), 4096):
+                block[i] = 1
+            time.sleep(2)
+            os._exit(0)
+        pids.append(pid)
+    killed = 0
+    for pid in pids:
+        _, status = os.waitpid(pid, 0)
+        killed += os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGKILL
+    return killed
+
 def kernel_channels():
     # The keyring (a channel to a later submission), namespaces, anonymous memory files.
     import ctypes
@@ -141,6 +180,30 @@ def test_seccomp_refuses_keyring_namespaces_and_memfd(package, isolation):
     eperm = [-1, 1]
     assert result.value == {"keyctl": eperm, "add_key": eperm, "unshare_user": eperm, "clone_newuser": eperm,
                             "memfd": 1, "subprocess": 0}
+
+
+@needs_bwrap
+def test_writable_folders_are_capped_and_the_package_is_read_only(package):
+    with Sandbox(package, Limits(disk_bytes=32 * 1024**2), isolation="bwrap") as box:
+        written, error = box.call("exercises.hostile", "fill_disk").value
+        changed = box.call("exercises.hostile", "write_own_package").value
+    assert written <= 32 * 1024**2 and error == 28  # ENOSPC
+    assert changed == 30  # EROFS
+    assert not (package / "hostile.py").read_text().endswith("# changed")
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="a memory cgroup needs root")
+def test_the_total_memory_of_a_sandbox_is_capped(package):
+    from grader.memory_cage import MemoryCage
+
+    probe = MemoryCage.create(64 * 1024**2, "grader-probe")
+    if probe is None:
+        pytest.skip("no writable memory cgroup on this machine")
+    probe.close()
+    limits = Limits(total_memory_bytes=400 * 1024**2, memory_bytes=1024**3)
+    with Sandbox(package, limits) as box:
+        killed = box.call("exercises.hostile", "hogs_together", [3, 250], timeout=30).value
+    assert killed >= 1
 
 
 def test_a_call_returns_plain_data(sandbox):

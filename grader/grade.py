@@ -218,7 +218,7 @@ class Worker:
                 [sys.executable, "-m", "grader.grade", "--worker"], stdin=subprocess.PIPE,
                 stdout=subprocess.PIPE, stderr=log, cwd=self.folder, env=env, start_new_session=True)
         os.set_blocking(self.process.stdout.fileno(), False)
-        self.buffer = b""
+        self.buffer = bytearray()
         self.ready = False
         self.closed = False
         self.job: Job | None = None
@@ -250,14 +250,19 @@ class Worker:
             if not chunk:
                 self.closed = True
                 break
-            self.buffer += chunk
+            self.buffer += chunk  # a bytearray: appending is linear in what arrives
         events = []
-        while b"\n" in self.buffer:
-            line, _, self.buffer = self.buffer.partition(b"\n")
+        start = 0
+        while True:
+            end = self.buffer.find(b"\n", start)
+            if end < 0:
+                break
             try:
-                events.append(json.loads(line))
+                events.append(json.loads(self.buffer[start:end]))
             except ValueError:
-                continue
+                pass
+            start = end + 1
+        del self.buffer[:start]
         return events
 
     @property
@@ -266,7 +271,9 @@ class Worker:
 
     def log_tail(self, characters: int = 1500) -> str:
         try:
-            return self.log_path.read_text(encoding="utf-8", errors="replace")[-characters:].strip()
+            with open(self.log_path, "rb") as log:  # only the end: the log may be large
+                log.seek(max(0, log.seek(0, os.SEEK_END) - 4 * characters))
+                return log.read().decode("utf-8", errors="replace")[-characters:].strip()
         except OSError:
             return ""
 

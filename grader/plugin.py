@@ -44,6 +44,7 @@ from typing import Callable
 import pytest
 
 from .credit import GradedFailure, partial_points
+from .figures import bounded
 from .outcome import MESSAGE_LIMIT, Outcome, StudentCallFailed, StudentCallStopped, capped
 from .sandbox import Limits, Sandbox
 from .spec import EXERCISES, VISIBILITIES, SpecError, TestSpec
@@ -275,7 +276,7 @@ def outcome_of(excinfo, item) -> Outcome:
         return Outcome(found.status, 0.0, capped(message, MESSAGE_LIMIT), found.figure, {**metrics, **found.metrics})
     if isinstance(exc, GradedFailure):
         message = str(exc) + (f"\n{notes}" if notes else "")
-        return Outcome("failed", exc.fraction, capped(message, MESSAGE_LIMIT), exc.figure, metrics)
+        return Outcome("failed", exc.fraction, capped(message, MESSAGE_LIMIT), bounded(exc.figure), metrics)
     if isinstance(exc, AssertionError):
         message = str(exc) + (f"\n{notes}" if notes else "")
         return Outcome("failed", 0.0, capped(message, MESSAGE_LIMIT), None, metrics)

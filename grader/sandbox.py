@@ -75,6 +75,7 @@ UID_LOCK_FOLDER = "grader-sandbox-uids"
 #: Statuses a worker may answer with.
 WORKER_STATUSES = ("ok", "not_implemented", "import_error", "missing", "error", "unreadable")
 RESPONSE_LIMIT = 64 * 1024 * 1024  # bytes of one JSON response
+TEXT_LIMIT = 20_000  # characters of a worker's message or printed output kept per call
 STDERR_KEPT = 8_000  # characters of the worker's stderr kept for messages
 
 
@@ -594,7 +595,9 @@ class Sandbox:
             text = data.get(name, "")
             if type(text) is not str:
                 raise codec.NotPlainData(f"{name} is not a text")
-            texts[name] = codec.clean_text(text)
+            # Capped before anything else reads them: a message is kept to what a person reads.
+            texts[name] = codec.clean_text(text[:TEXT_LIMIT] + (f"\n[... {len(text) - TEXT_LIMIT} more characters "
+                                                                 "not shown]" if len(text) > TEXT_LIMIT else ""))
         after = data.get("args_after") or []
         if type(after) is not list or any(a is not None and type(a) is not dict for a in after):
             raise codec.NotPlainData("args_after is not a list of bodies")

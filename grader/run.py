@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import os
 from pathlib import Path
 
 from .outcome import Outcome
@@ -18,6 +19,7 @@ from .sandbox import Limits
 from .spec import SpecError, TestSpec
 
 PYTEST_CONFIG = TESTS_DIR / "pytest.ini"
+AUTOLOAD_VARIABLE = "PYTEST_DISABLE_PLUGIN_AUTOLOAD"
 
 
 def pytest_main(arguments: list[str], plugin: GradedRun) -> tuple[int, str]:
@@ -27,11 +29,19 @@ def pytest_main(arguments: list[str], plugin: GradedRun) -> tuple[int, str]:
     base = ["-c", str(PYTEST_CONFIG), "--rootdir", str(TESTS_DIR), "-q", "-p", "no:cacheprovider",
             "--no-header", "--tb=no", "-p", "no:warnings"]
     text = io.StringIO()
+    # Only the plugins graded tests use: the installed ones (nbval, xdist...) cost
+    # seconds of start-up and change nothing here.
+    autoload = os.environ.get(AUTOLOAD_VARIABLE)
+    os.environ[AUTOLOAD_VARIABLE] = "1"
     with contextlib.redirect_stdout(text), contextlib.redirect_stderr(text):
         try:
             code = pytest.main(base + arguments, plugins=[plugin])
         finally:
             plugin.close()
+            if autoload is None:
+                os.environ.pop(AUTOLOAD_VARIABLE, None)
+            else:
+                os.environ[AUTOLOAD_VARIABLE] = autoload
     return int(code), text.getvalue()
 
 
@@ -60,11 +70,12 @@ def package_folder(path: Path) -> Path:
 
 def run_tests(student_dir: Path, tests: list[TestSpec], limits: Limits = Limits(), slot: int = 0,
               isolation: str = "auto", reference_dir: Path | None = None,
-              budget_seconds: float | None = None, progress=None) -> list[TestResult]:
+              budget_seconds: float | None = None, progress=None, exitfirst: bool = False) -> list[TestResult]:
     """Run ``tests`` on the package in ``student_dir``; never raises for student faults.
 
     ``budget_seconds`` bounds the whole run: tests not started in time end as
-    ``not_run``.  ``progress(result)`` is called after each test.
+    ``not_run``.  ``progress(result)`` is called after each test.  ``exitfirst`` stops
+    at the first test that does not pass (the others are left out of the results).
     """
     if not tests:
         return []
@@ -72,7 +83,9 @@ def run_tests(student_dir: Path, tests: list[TestSpec], limits: Limits = Limits(
                     reference_dir=reference_dir, budget_seconds=budget_seconds, progress=progress,
                     names={t.name for t in tests})
     paths = sorted({t.path for t in tests})
-    code, text = pytest_main(paths, run)
+    code, text = pytest_main((["-x"] if exitfirst else []) + paths, run)
+    if exitfirst and any(r.outcome.status != "passed" for r in run.results):
+        return run.results
     done = {r.test.name for r in run.results}
     missing = [t for t in tests if t.name not in done]
     for test in missing:  # a test pytest never ran: the grader's own failure, said plainly

@@ -1,0 +1,320 @@
+"""Mutation testing of the graded tests: does every plausible bug in a solution block
+lose points?
+
+    python -m tools.mutation [--exercise NAME ...] [--jobs 2] [--limit N] [--out DIR]
+
+Cosmic Ray (``cosmic-ray`` 8.7, from the package index) finds every mutation of the
+reference's ``### BEGIN SOLUTION`` blocks (its session database keeps them, those
+outside the blocks marked skipped, as its own filters do).  Each mutant is one
+operator applied once -- a number changed, ``+`` for ``-``, ``<`` for ``<=``, a
+condition negated, a loop that never runs -- and is graded like a submission: a copy
+of ``solutions/`` named ``exercises`` with that one change, run in the sandbox by the
+public graded tests of its exercise, then the other public ones, then the hidden ones,
+each stopping at the first test that does not pass.  A mutant is killed by the public
+tests, by the hidden ones, or survives.
+
+Mutants that behave exactly as the reference (a change no input can tell apart) are
+*equivalent*: each is listed, with the reason, in ``tools/mutation_equivalent.toml``
+and left out of the scores.  The command prints per exercise the share of the other
+mutants killed by the public and hidden tests together and by the public tests alone,
+then every survivor with its diff, and writes ``DIR/mutation.json`` and Cosmic Ray's
+session ``DIR/session.sqlite`` (``cr-report DIR/session.sqlite`` reads it).
+
+Operators: arithmetic among ``+ - * /``, comparisons, unary operators, ``and``/``or``,
+``True``/``False``, ``not`` added, numbers, ``break``/``continue`` and loops that never
+run.  Bitwise and exotic arithmetic replacements on floats (``+`` for ``^``) only make
+code that raises at once, which any test kills; they are left out to save time.
+"""
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import difflib
+import hashlib
+import json
+import os
+import re
+import shutil
+import sys
+import tempfile
+import time
+import tomllib
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+SOLUTIONS = REPO / "solutions"
+EQUIVALENT_FILE = Path(__file__).resolve().parent / "mutation_equivalent.toml"
+BEGIN, END = "### BEGIN SOLUTION", "### END SOLUTION"
+#: The exercise each written function belongs to (module, or module:function prefix).
+EXERCISE_OF_MODULE = {
+    "response/momentum_1d.py": "momentum", "broadphase/uniform_grid.py": "grid",
+    "broadphase/quadtree.py": "quadtree", "narrowphase/projection.py": "sat",
+    "response/impulse.py": "impulse", "response/positional_correction.py": "impulse",
+}
+NARROW_PHASE = ("narrowphase/aabb_aabb.py", "narrowphase/circle_circle.py", "narrowphase/circle_polygon.py",
+                "narrowphase/polygon_polygon.py")
+KEPT_OPERATORS = re.compile(
+    r"(ReplaceBinaryOperator_(Add|Sub|Mul|Div)_(Add|Sub|Mul|Div)$|ReplaceComparisonOperator_|"
+    r"ReplaceUnaryOperator_|ReplaceAndWithOr|ReplaceOrWithAnd|ReplaceTrueWithFalse|ReplaceFalseWithTrue|"
+    r"AddNot|NumberReplacer|ReplaceBreakWithContinue|ReplaceContinueWithBreak|ZeroIterationForLoop)")
+
+
+def exercise_of(module: str, function: str) -> str:
+    """The exercise a mutated function belongs to; the narrow-phase files hold both the
+    SAT overlap tests and contact generation (``collide_*``)."""
+    if module in EXERCISE_OF_MODULE:
+        return EXERCISE_OF_MODULE[module]
+    if module in NARROW_PHASE:
+        return "contacts" if function.split(".")[-1].startswith("collide") else "sat"
+    return "other"
+
+
+def solution_lines(path: Path) -> list[tuple[int, int]]:
+    """(first, last) line numbers (1-based) strictly inside each solution block."""
+    blocks, start = [], None
+    for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+        if line.strip() == BEGIN:
+            start = number
+        elif line.strip() == END and start is not None:
+            blocks.append((start + 1, number - 1))
+            start = None
+    return blocks
+
+
+@dataclass
+class Mutant:
+    job_id: str
+    module: str          # relative to the package, e.g. "broadphase/quadtree.py"
+    function: str
+    operator: str
+    occurrence: int
+    line: int
+    exercise: str
+    key: str = ""        # stable name: module, function, operator and the changed lines
+    diff: str = ""
+    killed_by: str = ""  # "public", "hidden" or "" (survived); "none" when no mutation applied
+    test: str = ""       # the test that killed it
+    status: str = ""     # that test's status (failed, error, timeout, ...)
+    seconds: float = 0.0
+
+
+def find_mutants(session: Path, exercises: set[str] | None) -> list[Mutant]:
+    """Every kept mutation inside a solution block, recorded in a Cosmic Ray session."""
+    from cosmic_ray.commands.init import init
+    from cosmic_ray.mutating import mutate_code
+    from cosmic_ray.plugins import get_operator
+    from cosmic_ray.work_db import WorkDB, use_db
+    from cosmic_ray.work_item import WorkerOutcome, WorkResult
+
+    files = sorted(p for p in SOLUTIONS.rglob("*.py") if BEGIN in p.read_text(encoding="utf-8"))
+    mutants = []
+    with use_db(str(session), WorkDB.Mode.create) as db:
+        init(files, db, {})
+        skipped = []
+        for item in db.work_items:
+            spec = item.mutations[0]
+            path = Path(spec.module_path)
+            module = path.relative_to(SOLUTIONS).as_posix()
+            line = spec.start_pos[0]
+            inside = any(first <= line <= last for first, last in solution_lines(path))
+            operator = spec.operator_name.split("/")[-1]
+            function = spec.definition_name or "?"
+            exercise = exercise_of(module, function)
+            if not inside or not KEPT_OPERATORS.search(operator) or (exercises and exercise not in exercises):
+                skipped.append(item.job_id)
+                continue
+            source = path.read_text(encoding="utf-8")
+            mutated = mutate_code(source, get_operator(spec.operator_name)(**(spec.operator_args or {})),
+                                  spec.occurrence)
+            if mutated is None or mutated == source:
+                skipped.append(item.job_id)
+                continue
+            diff = "".join(difflib.unified_diff(source.splitlines(True), mutated.splitlines(True),
+                                                f"a/{module}", f"b/{module}", n=0))
+            changed = [l for l in diff.splitlines() if l[:1] in "+-" and not l.startswith(("+++", "---"))]
+            key = f"{module}:{function}:{operator}:" + hashlib.sha1(
+                "\n".join(l[0] + l[1:].strip() for l in changed).encode()).hexdigest()[:10]
+            mutants.append(Mutant(item.job_id, module, function, spec.operator_name, spec.occurrence, line,
+                                  exercise, key, diff))
+        db.set_multiple_results(skipped, WorkResult(worker_outcome=WorkerOutcome.SKIPPED))
+    seen: dict[str, int] = {}
+    for mutant in mutants:  # two identical changes of one function: number them
+        seen[mutant.key] = seen.get(mutant.key, 0) + 1
+        if seen[mutant.key] > 1:
+            mutant.key += f"#{seen[mutant.key]}"
+    return mutants
+
+
+# Workers ------------------------------------------------------------------------------------
+_WORKSPACE: Path | None = None
+_SLOT = 0
+
+
+def _start_worker(slots) -> None:
+    global _WORKSPACE, _SLOT
+    _SLOT = slots.get()
+    _WORKSPACE = Path(tempfile.mkdtemp(prefix="mutation-"))
+    shutil.copytree(SOLUTIONS, _WORKSPACE / "exercises", ignore=shutil.ignore_patterns("__pycache__"))
+
+
+def _graded_tests():
+    from grader.spec import load_spec
+
+    return load_spec()
+
+
+def grade_mutant(mutant: Mutant) -> Mutant:
+    """Apply the mutant in this worker's copy, run the tests in order, restore the copy."""
+    from cosmic_ray.mutating import mutate_code
+    from cosmic_ray.plugins import get_operator
+    from grader.run import run_tests
+    from grader.sandbox import Limits
+
+    started = time.perf_counter()
+    target = _WORKSPACE / "exercises" / mutant.module
+    source = (SOLUTIONS / mutant.module).read_text(encoding="utf-8")
+    mutated = mutate_code(source, get_operator(mutant.operator)(), mutant.occurrence)
+    if mutated is None:
+        mutant.killed_by = "none"
+        return mutant
+    tests = _graded_tests()
+    own = [t for t in tests if t.exercise == mutant.exercise]
+    groups = [("public", [t for t in own if t.public]), ("public", [t for t in tests if t.public and t not in own]),
+              ("hidden", [t for t in own if not t.public]),
+              ("hidden", [t for t in tests if not t.public and t not in own])]
+    limits = Limits(call_timeout=5.0, cpu_seconds=60)
+    try:
+        target.write_text(mutated, encoding="utf-8")
+        for suite, chosen in groups:
+            if not chosen:
+                continue
+            results = run_tests(_WORKSPACE, chosen, limits, slot=_SLOT, budget_seconds=60, exitfirst=True)
+            failing = [r for r in results if r.outcome.status != "passed"]
+            if failing:
+                mutant.killed_by, mutant.test, mutant.status = suite, failing[0].test.name, failing[0].outcome.status
+                break
+    finally:
+        target.write_text(source, encoding="utf-8")
+    mutant.seconds = round(time.perf_counter() - started, 2)
+    return mutant
+
+
+def run_mutants(mutants: list[Mutant], jobs: int, progress=None) -> list[Mutant]:
+    import multiprocessing
+
+    context = multiprocessing.get_context("forkserver")
+    slots = context.Manager().Queue()
+    for slot in range(jobs):
+        slots.put(slot)
+    done = []
+    with concurrent.futures.ProcessPoolExecutor(jobs, mp_context=context, initializer=_start_worker,
+                                                initargs=(slots,)) as pool:
+        for mutant in pool.map(grade_mutant, mutants, chunksize=1):
+            done.append(mutant)
+            if progress is not None:
+                progress(mutant, len(done), len(mutants))
+    return done
+
+
+def record(session: Path, mutants: list[Mutant]) -> None:
+    """The outcomes into Cosmic Ray's session, so its reports read them."""
+    from cosmic_ray.work_db import WorkDB, use_db
+    from cosmic_ray.work_item import TestOutcome, WorkerOutcome, WorkResult
+
+    with use_db(str(session), WorkDB.Mode.open) as db:
+        for m in mutants:
+            if m.killed_by == "none":
+                db.set_result(m.job_id, WorkResult(worker_outcome=WorkerOutcome.NO_TEST))
+                continue
+            outcome = TestOutcome.KILLED if m.killed_by else TestOutcome.SURVIVED
+            db.set_result(m.job_id, WorkResult(worker_outcome=WorkerOutcome.NORMAL, test_outcome=outcome,
+                                               output=f"{m.killed_by or 'survived'} {m.test}".strip(), diff=m.diff))
+
+
+def equivalent_mutants(path: Path = EQUIVALENT_FILE) -> dict[str, str]:
+    """key -> reason, from the reviewed list."""
+    if not path.is_file():
+        return {}
+    data = tomllib.loads(path.read_text(encoding="utf-8"))
+    out = {}
+    for entry in data.get("mutant", []):
+        if not entry.get("reason", "").strip():
+            raise ValueError(f"{path}: the equivalent mutant {entry.get('key')!r} needs a reason")
+        out[str(entry["key"])] = str(entry["reason"])
+    return out
+
+
+def scores(mutants: list[Mutant], equivalent: dict[str, str]) -> dict[str, dict]:
+    """Per exercise: mutants, equivalent, killed by public, by all, and the two shares."""
+    table: dict[str, dict] = {}
+    for m in mutants:
+        if m.killed_by == "none":
+            continue
+        row = table.setdefault(m.exercise, {"mutants": 0, "equivalent": 0, "public": 0, "all": 0, "survivors": []})
+        row["mutants"] += 1
+        if m.key in equivalent:
+            row["equivalent"] += 1
+            continue
+        row["public"] += m.killed_by == "public"
+        row["all"] += m.killed_by in ("public", "hidden")
+        if not m.killed_by:
+            row["survivors"].append(m.key)
+    for row in table.values():
+        counted = row["mutants"] - row["equivalent"]
+        row["public_share"] = row["public"] / counted if counted else 1.0
+        row["all_share"] = row["all"] / counted if counted else 1.0
+    return table
+
+
+def format_table(table: dict[str, dict]) -> str:
+    lines = ["| exercise | mutants | equivalent | killed (public + hidden) | killed (public alone) |",
+             "| --- | --- | --- | --- | --- |"]
+    for exercise in sorted(table):
+        row = table[exercise]
+        lines.append(f"| {exercise} | {row['mutants']} | {row['equivalent']} | {row['all_share']:.1%} "
+                     f"({row['all']}) | {row['public_share']:.1%} ({row['public']}) |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m tools.mutation", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--exercise", action="append", default=None,
+                        help="only this exercise's mutants (repeatable): momentum, grid, quadtree, sat, contacts, "
+                             "impulse")
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--limit", type=int, default=None, help="grade only every k-th mutant so that about N run")
+    parser.add_argument("--out", default="out/mutation")
+    args = parser.parse_args(argv)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    session = out / "session.sqlite"
+    mutants = find_mutants(session, set(args.exercise) if args.exercise else None)
+    if args.limit and len(mutants) > args.limit:
+        step = len(mutants) / args.limit
+        mutants = [mutants[int(i * step)] for i in range(args.limit)]
+    print(f"{len(mutants)} mutants in the solution blocks; grading them with {args.jobs} jobs", flush=True)
+    started = time.perf_counter()
+
+    def progress(mutant, done, total):
+        if done % 25 == 0 or done == total:
+            print(f"  {done}/{total} graded ({time.perf_counter() - started:.0f} s)", flush=True)
+
+    graded = run_mutants(mutants, args.jobs, progress)
+    record(session, graded)
+    equivalent = equivalent_mutants()
+    table = scores(graded, equivalent)
+    (out / "mutation.json").write_text(json.dumps({"scores": table, "mutants": [asdict(m) for m in graded]},
+                                                  indent=1), encoding="utf-8")
+    print(format_table(table))
+    survivors = [m for m in graded if not m.killed_by and m.key not in equivalent]
+    if survivors:
+        print(f"\n{len(survivors)} survivors (add an equivalent one to {EQUIVALENT_FILE.name} with a reason):")
+        for m in survivors:
+            print(f"\n{m.key}  ({m.exercise}, line {m.line})\n{m.diff.rstrip()}")
+    print(f"\n{time.perf_counter() - started:.0f} s; details in {out / 'mutation.json'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,4 +1,5 @@
-# Generated from solutions/__init__.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/__init__.py on the instructor's side.
 """Reference engine of the course: real-time 2D collision detection and response.
 
 Conventions (stated once here and on the book's conventions page):

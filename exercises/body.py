@@ -1,4 +1,5 @@
-# Generated from solutions/body.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/body.py on the instructor's side.
 """Rigid bodies: mass properties, pose, velocities and material.
 
 A :class:`Body` owns one collision shape in its local frame, centred on the body's

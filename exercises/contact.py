@@ -1,4 +1,5 @@
-# Generated from solutions/contact.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/contact.py on the instructor's side.
 """Contact data produced by the narrow phase.
 
 A :class:`Contact` between shape A and shape B holds

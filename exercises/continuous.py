@@ -1,4 +1,5 @@
-# Generated from solutions/continuous.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/continuous.py on the instructor's side.
 """Continuous (a priori) collision detection for fast bodies ("bullets").
 
 Discrete detection looks only at the end of each step, so a body that moves farther

@@ -1,4 +1,5 @@
-# Generated from solutions/joints.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/joints.py on the instructor's side.
 """Distance joints: two anchor points kept at a distance, rigidly or as a soft spring.
 
 A :class:`DistanceJoint` ties an anchor on body ``a`` to an anchor on body ``b``

@@ -1,4 +1,5 @@
-# Generated from solutions/scene_metrics.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/scene_metrics.py on the instructor's side.
 """Measurements of a simulated scene, the same for the reference engine and pymunk.
 
 Each takes plain bodies (pymunk states are copied into them first), so one yardstick

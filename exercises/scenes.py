@@ -1,4 +1,5 @@
-# Generated from solutions/scenes.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/scenes.py on the instructor's side.
 """Named scenes as data: bodies, time step, duration, and what each scene needs.
 
 A :class:`Scene` declares the techniques it needs (rotation, friction, continuous

@@ -1,4 +1,5 @@
-# Generated from solutions/shapes.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/shapes.py on the instructor's side.
 """Collision shapes: circle, AABB, OBB and convex polygon.
 
 Every shape is an immutable value in one frame: a body holds its shape in the body's

@@ -1,4 +1,5 @@
-# Generated from solutions/vector.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/vector.py on the instructor's side.
 """Small 2D vector helpers shared by every module.
 
 Vectors are numpy arrays of shape ``(2,)`` (or ``(..., 2)`` where stated).

@@ -1,4 +1,5 @@
-# Generated from solutions/world.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/world.py on the instructor's side.
 """The world step: integrate forces, broad phase, narrow phase, resolve, integrate.
 
 :meth:`World.step` reads like the algorithm (as box2d-lite's ``World::Step`` does)::

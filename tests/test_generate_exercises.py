@@ -1,7 +1,12 @@
-"""The student package is generated from solutions/ and committed in sync."""
+"""The student package is generated from solutions/ and committed in sync, and the
+generator never erases a student's work: it refuses to overwrite edits unless forced,
+and then keeps a backup."""
+import hashlib
 import importlib
-import re
 import inspect
+import json
+import re
+import shutil
 import textwrap
 
 import pytest
@@ -35,8 +40,9 @@ def generated():
 
 def test_committed_exercises_match_the_generator(generated):
     files, _ = generated
-    problems = gen.differences(files, gen.existing_files(gen.REPO_ROOT / gen.TARGET_PACKAGE))
-    assert not problems, "run `python -m tools.generate_exercises`:\n" + "\n".join(problems)
+    problems = gen.check(files, gen.REPO_ROOT / gen.TARGET_PACKAGE)
+    assert not problems, "run `python -m tools.generate_exercises` (it refuses to overwrite edits):\n" + \
+        "\n".join(problems)
 
 
 def test_required_exercises_are_stubbed(generated):
@@ -64,8 +70,11 @@ def test_every_stub_imports_and_raises_not_implemented(generated):
         if rest:
             instance = object.__new__(target)
             target = getattr(instance, rest[-1])
-        with pytest.raises(NotImplementedError):
+        with pytest.raises(NotImplementedError) as info:
             _call_with_placeholders(target)
+        # The message names the function to write (a method, not its caller) and its check.
+        assert f"write {stub.qualname}()" in str(info.value), stub
+        assert f"`grader check {stub.exercise}`" in str(info.value), stub
 
 
 def test_student_modules_never_import_the_reference(generated):
@@ -148,3 +157,213 @@ def test_check_reports_stale_and_missing_files(tmp_path):
 def test_doctest_imports_point_at_the_student_package():
     source = 'def f():\n    """\n    >>> from solutions.shapes import Circle\n    """\n'
     assert ">>> from exercises.shapes import Circle" in gen.strip_solutions(source)[0]
+
+
+# Every stub belongs to an exercise; headers and messages say how to check it -----------
+def test_every_stub_of_the_course_names_its_exercise(generated):
+    from grader.spec import EXERCISES  # the names `grader check` takes
+
+    _, stubs = generated
+    unnamed = [f"{s.module}.{s.qualname}" for s in stubs if s.exercise not in EXERCISES]
+    assert not unnamed, f"add these stubs to tools/generate_exercises.py EXERCISES: {unnamed}"
+    by_name = {(s.module, s.qualname): s.exercise for s in stubs}
+    assert by_name["exercises.broadphase.quadtree", "Quadtree.insert"] == "quadtree"
+    assert by_name["exercises.narrowphase.aabb_aabb", "aabbs_overlap"] == "sat"
+    assert by_name["exercises.narrowphase.aabb_aabb", "collide_aabb_aabb"] == "contacts"
+    assert by_name["exercises.response.positional_correction", "correct_positions"] == "impulse"
+
+
+def _header(text: str) -> str:
+    """The comment lines a student file starts with."""
+    lines = text.splitlines(keepends=True)
+    return "".join(lines[: next(i for i, line in enumerate(lines) if not line.startswith("#"))])
+
+
+def test_headers_say_what_the_file_is_and_how_to_check_it(generated):
+    files, stubs = generated
+    for name, text in files.items():
+        head = _header(text)
+        assert len(head.splitlines()) >= 2, name
+        assert "generate_exercises" not in head and "python -m" not in head, name  # never "regenerate"
+        module = ".".join(["exercises", *name.removesuffix(".py").split("/")]).removesuffix(".__init__")
+        mine = [s for s in stubs if s.module == module]
+        if mine:
+            assert head.startswith("# Exercise file of the collision course"), name
+            assert "NotImplementedError" in head, name
+            for stub in mine:
+                assert f"`grader check {stub.exercise}`" in head, (name, stub)
+        else:
+            assert head.startswith("# Library file of the collision course (you do not need to edit it)"), name
+    two = files["narrowphase/polygon_polygon.py"]
+    assert "`grader check sat` (polygons_overlap, obbs_overlap)" in two
+    assert "`grader check contacts` (clip_segment_to_half_plane" in " ".join(two.replace("\n# ", " ").split())
+
+
+def test_a_stub_outside_the_table_points_at_every_exercise():
+    source = "def f():\n    ### BEGIN SOLUTION\n    return 1\n    ### END SOLUTION\n"
+    student, _ = gen.strip_solutions(source)
+    assert 'raise NotImplementedError("write f(), then run `grader check`")' in student
+
+
+# The generator refuses to overwrite edits -------------------------------------------------
+@pytest.fixture
+def course(tmp_path):
+    """Copies of the repository's solutions/ and exercises/ (never the real tree)."""
+    source, target = tmp_path / "solutions", tmp_path / "exercises"
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
+    shutil.copytree(gen.REPO_ROOT / gen.SOURCE_PACKAGE, source, ignore=ignore)
+    shutil.copytree(gen.REPO_ROOT / gen.TARGET_PACKAGE, target, ignore=ignore)
+    assert (target / gen.MANIFEST).is_file()
+
+    def run(*options):
+        return gen.main(["--source", str(source), "--target", str(target), *options])
+
+    return source, target, run
+
+
+def snapshot(folder):
+    """Every file under ``folder`` and its bytes."""
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def edit_a_stub(target):
+    path = target / "broadphase" / "quadtree.py"
+    text = path.read_text()
+    stub = 'raise NotImplementedError("write Quadtree.insert(), then run `grader check quadtree`")'
+    assert stub in text
+    path.write_text(text.replace(stub, "self.root.bodies.append(index)  # my work"))
+    return "exercises/broadphase/quadtree.py"
+
+
+def add_a_file(target):
+    (target / "my_helpers.py").write_text("def mine():\n    return 42\n")
+    return "exercises/my_helpers.py"
+
+
+def delete_a_file(target):
+    (target / "vector.py").unlink()
+    return "exercises/vector.py"
+
+
+@pytest.mark.parametrize("change, kind", [(edit_a_stub, "edited"), (add_a_file, "added"),
+                                          (delete_a_file, "deleted")])
+def test_edits_are_refused_named_and_left_alone(course, capsys, change, kind):
+    source, target, run = course
+    named = change(target)
+    before, beside = snapshot(target), sorted(p.name for p in target.parent.iterdir())
+    solutions_before = snapshot(source)
+    capsys.readouterr()
+    assert run() == gen.REFUSED
+    err = capsys.readouterr().err
+    assert f"{kind}: {named}" in err
+    assert "student" in err and "--force" in err and "Nothing was written" in err
+    assert snapshot(target) == before  # byte for byte
+    assert sorted(p.name for p in target.parent.iterdir()) == beside  # no backup, no leftovers
+    assert snapshot(source) == solutions_before
+
+
+def test_force_keeps_a_backup_of_the_edited_tree_then_writes_fresh_stubs(course, capsys):
+    source, target, run = course
+    edit_a_stub(target)
+    add_a_file(target)
+    edited = snapshot(target)
+    capsys.readouterr()
+    assert run("--force") == 0
+    out = capsys.readouterr().out
+    backups = [p for p in target.parent.iterdir() if p.name.startswith("exercises.backup-")]
+    assert len(backups) == 1 and re.fullmatch(r"exercises\.backup-\d{8}-\d{6}", backups[0].name)
+    assert str(backups[0]) in out
+    assert snapshot(backups[0]) == edited
+    files, _ = gen.generate(source)
+    assert gen.check(files, target) == []
+    assert "my work" not in (target / "broadphase" / "quadtree.py").read_text()
+    assert not (target / "my_helpers.py").exists()
+    assert run() == 0  # the fresh tree is the generator's again: no refusal, no backup
+    assert len([p for p in target.parent.iterdir() if p.name.startswith("exercises.backup-")]) == 1
+
+
+def test_an_unedited_tree_is_rewritten_without_a_backup(course, capsys):
+    source, target, run = course
+    (target / "__pycache__").mkdir(exist_ok=True)
+    (target / "__pycache__" / "vector.cpython-311.pyc").write_bytes(b"cache")  # no one's work
+    assert run() == 0 and run("--force") == 0
+    assert sorted(p.name for p in target.parent.iterdir()) == ["exercises", "solutions"]
+
+
+def test_without_a_record_the_tree_must_equal_the_generated_one(course, capsys):
+    source, target, run = course
+    (target / gen.MANIFEST).unlink()
+    assert run() == 0  # a tree from before the record: equal, so the record is written
+    assert (target / gen.MANIFEST).is_file()
+    (target / gen.MANIFEST).unlink()
+    named = edit_a_stub(target)
+    before = snapshot(target)
+    capsys.readouterr()
+    assert run() == gen.REFUSED
+    err = capsys.readouterr().err
+    assert f"differs: {named}" in err and "no record" in err
+    assert snapshot(target) == before
+
+
+def test_an_unreadable_record_counts_as_none(course):
+    source, target, run = course
+    (target / gen.MANIFEST).write_text("{not json")
+    assert run() == 0
+    edit_a_stub(target)
+    (target / gen.MANIFEST).write_text("[]")
+    assert run() == gen.REFUSED
+
+
+def test_the_record_holds_hashes_of_the_stub_files_only(course, generated):
+    source, target, _ = course
+    files, _ = generated
+    text = (target / gen.MANIFEST).read_text()
+    record = json.loads(text)
+    assert set(record) == {"about", "sha256"}
+    assert record["sha256"] == {name: hashlib.sha256(body.encode()).hexdigest() for name, body in files.items()}
+    assert all(re.fullmatch(r"[0-9a-f]{64}", value) for value in record["sha256"].values())
+    # Nothing of a solution block, not even the hash of a solution file, is in the record.
+    solution_lines = set()
+    for path in source.rglob("*.py"):
+        inside = False
+        for line in path.read_text().splitlines():
+            if line.strip() == gen.BEGIN_MARKER:
+                inside = True
+            elif line.strip() == gen.END_MARKER:
+                inside = False
+            elif inside and len(line.strip()) >= 8:
+                solution_lines.add(line.strip())
+        assert hashlib.sha256(path.read_bytes()).hexdigest() not in text
+    assert solution_lines
+    assert not [line for line in solution_lines if line in text]
+
+
+def test_check_names_the_edits_and_never_suggests_erasing_them(course, capsys):
+    source, target, run = course
+    assert run("--check") == 0
+    named = edit_a_stub(target)
+    before = snapshot(target)
+    capsys.readouterr()
+    assert run("--check") == 1
+    err = capsys.readouterr().err
+    assert named.removeprefix("exercises/") in err and "perhaps a student's work" in err
+    assert "refuses" in err and "--force only if those edits are not wanted" in err
+    assert snapshot(target) == before
+
+
+def test_check_reports_a_missing_record_and_files_that_are_not_python(course):
+    source, target, run = course
+    (target / "notes.txt").write_text("my notes\n")
+    assert run("--check") == 1
+    (target / "notes.txt").unlink()
+    (target / gen.MANIFEST).unlink()
+    assert run("--check") == 1
+
+
+def test_no_reference_package_writes_nothing(tmp_path, course, capsys):
+    _, target, _ = course
+    before = snapshot(target)
+    assert gen.main(["--source", str(tmp_path / "nowhere"), "--target", str(target)]) == 2
+    assert "grader check" in capsys.readouterr().err
+    assert gen.main(["--source", str(tmp_path / "nowhere"), "--target", str(target), "--force"]) == 2
+    assert snapshot(target) == before

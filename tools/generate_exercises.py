@@ -1,32 +1,49 @@
 """Generate the student package ``exercises/`` from the reference engine ``solutions/``.
 
 Every block between a line ``### BEGIN SOLUTION`` and a line ``### END SOLUTION``
-(nbgrader style, inside a function body, below the docstring) becomes
-``raise NotImplementedError`` at the marker's indentation.  Modules without markers
-are copied verbatim (apart from a header naming their source).  The whole output is
-built in memory first: a marker error writes nothing.
+(nbgrader style, inside a function body, below the docstring) becomes a
+``raise NotImplementedError("write <function>(), then run `grader check <exercise>`")``
+at the marker's indentation.  Modules without markers are copied verbatim.  Each file
+starts with a header for the student: an exercise file names the ``grader check``
+command(s) of its exercise(s) (:data:`EXERCISES`), a library file says it needs no
+editing.  The whole output is built in memory first: a marker error writes nothing.
+
+The generator never erases work.  It records what it wrote in ``exercises/.generated.json``
+(:data:`MANIFEST`: each file's SHA-256, nothing else), and before writing it compares
+the folder with that record: a file edited, added or deleted since (a student's work,
+perhaps) makes it refuse, name the files and write nothing.  Without a record (a
+first run, a tree older than the record) the folder must equal what it would write.
+``--force`` writes anyway, after moving the old folder to ``exercises.backup-<date>-<time>/``
+beside it.
 
 Usage::
 
-    python -m tools.generate_exercises            # rewrite exercises/
-    python -m tools.generate_exercises --check    # exit 1 if exercises/ is stale
+    python -m tools.generate_exercises            # rewrite exercises/ (refused if it holds edits)
+    python -m tools.generate_exercises --force    # the same, keeping a backup of an edited tree
+    python -m tools.generate_exercises --check    # exit 1 if exercises/ differs from what it makes
 
-Errors (``MarkerError``, exit status 2) name the file and line: a nested BEGIN, an END
-without BEGIN, a BEGIN never closed, a marker outside a function body, an empty block,
-an absolute ``solutions`` import (the student package must import its own modules),
-or generated code that does not parse.
+Errors (exit status 2) name the file and line: a nested BEGIN, an END without BEGIN,
+a BEGIN never closed, a marker outside a function body, an empty block, an absolute
+``solutions`` import (the student package must import its own modules), generated code
+that does not parse, or no ``solutions/`` folder at all.  A refusal to overwrite edits
+exits with status 3.
 """
 from __future__ import annotations
 
 import argparse
 import ast
 import difflib
+import hashlib
+import json
 import re
 import shutil
 import sys
 import tempfile
+import textwrap
+import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 BEGIN_MARKER = "### BEGIN SOLUTION"
 END_MARKER = "### END SOLUTION"
@@ -34,23 +51,87 @@ STUB_LINE = "raise NotImplementedError"
 SOURCE_PACKAGE = "solutions"
 TARGET_PACKAGE = "exercises"
 REPO_ROOT = Path(__file__).resolve().parent.parent
-HEADER = ("# Generated from {source} by tools/generate_exercises.py: edit solutions/, "
-          "then run `python -m tools.generate_exercises`.\n")
+#: What the generator last wrote, in the target folder: {"sha256": {relative path: digest}}.
+MANIFEST = ".generated.json"
+#: ``--force`` moves an edited target folder to ``<target>.backup-<BACKUP_STAMP>``.
+BACKUP_STAMP = "%Y%m%d-%H%M%S"
+#: Exit status of a refusal to overwrite edits (2: a marker or source error).
+REFUSED = 3
+#: Folders and files in the target that are no one's work: Python's caches.
+CACHE_PARTS = ("__pycache__",)
+CACHE_SUFFIXES = (".pyc", ".pyo")
+
+#: The exercise (the name ``grader check`` takes, see grader/spec.py) of every stubbed
+#: function, by module under solutions/: one name for all the module's stubs, or
+#: {qualname: exercise} where the module serves two exercises.  A stub not listed
+#: (tests/test_generate_exercises.py fails for the repository's own) names plain
+#: ``grader check``, which runs every exercise.
+EXERCISES: dict[str, str | dict[str, str]] = {
+    "response/momentum_1d.py": "momentum",
+    "broadphase/uniform_grid.py": "grid",
+    "broadphase/quadtree.py": "quadtree",
+    "narrowphase/projection.py": "sat",
+    "narrowphase/aabb_aabb.py": {"aabbs_overlap": "sat", "collide_aabb_aabb": "contacts"},
+    "narrowphase/circle_circle.py": {"circles_overlap": "sat", "collide_circle_circle": "contacts"},
+    "narrowphase/circle_polygon.py": {"circle_polygon_overlap": "sat", "collide_circle_polygon": "contacts"},
+    "narrowphase/polygon_polygon.py": {"polygons_overlap": "sat", "obbs_overlap": "sat",
+                                       "clip_segment_to_half_plane": "contacts",
+                                       "reference_face_manifold": "contacts",
+                                       "collide_polygon_polygon": "contacts"},
+    "response/impulse.py": "impulse",
+    "response/positional_correction.py": "impulse",
+}
+#: The comment lines above each student file (:func:`header`): what it is, how to check
+#: it, where it came from; never how to regenerate it, which would replace a student's work.
+EXERCISE_HEADER = ("Exercise file of the collision course: write the functions that raise NotImplementedError, "
+                   "then check them with {commands}.")
+LIBRARY_HEADER = "Library file of the collision course (you do not need to edit it)."
+PROVENANCE = "Handed out with the course; generated from {source} on the instructor's side."
+HEADER_WIDTH = 100
 ABSOLUTE_IMPORT = re.compile(rf"^\s*(from|import)\s+{SOURCE_PACKAGE}\b")
 # Doctest lines import from the package by name; the student copy imports its own.
 DOCTEST_IMPORT = re.compile(rf"^(\s*(?:>>>|\.\.\.)\s+(?:from|import)\s+){SOURCE_PACKAGE}\b")
 
 
-class MarkerError(ValueError):
+class GeneratorError(ValueError):
+    """The student package cannot be generated; the message says why (exit status 2)."""
+
+
+class MarkerError(GeneratorError):
     """A solution marker is misplaced; the message names the file and line."""
 
 
 @dataclass(frozen=True)
 class StubbedFunction:
-    """A function whose solution block was replaced: ``module`` and ``qualname``."""
+    """A function whose solution block was replaced: ``module`` and ``qualname``, and
+    the ``exercise`` whose ``grader check`` tests it (None if :data:`EXERCISES` has none)."""
 
     module: str
     qualname: str
+    exercise: str | None = None
+
+
+def exercise_of(relative: str, qualname: str, table: dict | None = None) -> str | None:
+    """The exercise of the stub ``qualname`` in ``solutions/<relative>`` (see :data:`EXERCISES`)."""
+    entry = (EXERCISES if table is None else table).get(relative)
+    if isinstance(entry, dict):
+        return entry.get(qualname)
+    return entry
+
+
+def check_commands(exercises: list[str | None]) -> str:
+    """The ``grader check`` command(s) that test functions of these exercises."""
+    named = list(dict.fromkeys(e for e in exercises if e))
+    commands = [f"`grader check {e}`" for e in named]
+    if not named or None in exercises:
+        commands.append("`grader check`")  # every exercise
+    return " and ".join(commands)
+
+
+def stub_line(qualname: str, exercise: str | None) -> str:
+    """The statement that replaces a solution block: it names what to write and how to check it."""
+    message = f"write {qualname}(), then run {check_commands([exercise])}"
+    return f"{STUB_LINE}({json.dumps(message)})"
 
 
 def _function_spans(tree: ast.AST, lines: list[str]) -> list[tuple[int, int, int, str]]:
@@ -86,14 +167,17 @@ def _function_spans(tree: ast.AST, lines: list[str]) -> list[tuple[int, int, int
     return spans
 
 
-def strip_solutions(source: str, filename: str = "<string>") -> tuple[str, list[str]]:
+def strip_solutions(source: str, filename: str = "<string>",
+                    exercise: Callable[[str], str | None] = lambda qualname: None) -> tuple[str, list[str]]:
     """Return ``(student_source, stubbed_qualnames)`` for one module's text.
 
+    ``exercise(qualname)`` names the exercise of a stub, for its message (None: all).
+
     >>> text = 'def f(x):\\n    \"\"\"Double x.\"\"\"\\n    ### BEGIN SOLUTION\\n    return 2 * x\\n    ### END SOLUTION\\n'
-    >>> print(strip_solutions(text)[0], end="")
+    >>> print(strip_solutions(text, exercise=lambda qualname: "momentum")[0], end="")
     def f(x):
         \"\"\"Double x.\"\"\"
-        raise NotImplementedError
+        raise NotImplementedError("write f(), then run `grader check momentum`")
     """
     lines = source.splitlines(keepends=True)
     try:
@@ -122,7 +206,7 @@ def strip_solutions(source: str, filename: str = "<string>") -> tuple[str, list[
             begin_line = number
             block_has_code = False
             indent = line[: len(line) - len(line.lstrip())]
-            out.append(f"{indent}{STUB_LINE}\n")
+            out.append(f"{indent}{stub_line(owners[-1], exercise(owners[-1]))}\n")
             stubbed.append(owners[-1])
             continue
         if stripped == END_MARKER:
@@ -148,20 +232,51 @@ def strip_solutions(source: str, filename: str = "<string>") -> tuple[str, list[
     return student, stubbed
 
 
-def generate(source_dir: Path) -> tuple[dict[str, str], list[StubbedFunction]]:
-    """Every file of the student package, as {relative path: text}, and the stubs made."""
+def header(source: str, stubs: list[tuple[str, str | None]] = ()) -> str:
+    """The comment lines above a student file: what it is, how to check it, where it came from.
+
+    ``stubs`` lists the file's (qualname, exercise); a file serving two exercises says
+    which functions each one checks.
+    """
+    if not stubs:
+        first = LIBRARY_HEADER
+    else:
+        exercises = list(dict.fromkeys(exercise for _, exercise in stubs))
+        commands = check_commands(exercises) if len(exercises) == 1 else " and ".join(
+            f"{check_commands([exercise])} ({', '.join(q for q, e in stubs if e == exercise)})"
+            for exercise in exercises)
+        first = EXERCISE_HEADER.format(commands=commands)
+    lines = []
+    for sentence in (first, PROVENANCE.format(source=source)):
+        lines += textwrap.wrap(sentence, width=HEADER_WIDTH, initial_indent="# ", subsequent_indent="# ",
+                               break_long_words=False, break_on_hyphens=False)
+    return "\n".join(lines) + "\n"
+
+
+def generate(source_dir: Path, exercises: dict | None = None) -> tuple[dict[str, str], list[StubbedFunction]]:
+    """Every file of the student package, as {relative path: text}, and the stubs made.
+
+    ``exercises`` maps modules and stubs to exercise names (default :data:`EXERCISES`).
+    """
+    source_dir = Path(source_dir)
+    sources = [p for p in sorted(source_dir.rglob("*.py")) if "__pycache__" not in p.parts] \
+        if source_dir.is_dir() else []
+    if not sources:
+        raise GeneratorError(f"{source_dir}: no reference package here (no .py files), so nothing to generate "
+                             f"from: the generator runs on the instructor's side, beside {SOURCE_PACKAGE}/. "
+                             "To test your own exercises, run `grader check <exercise>`.")
     files: dict[str, str] = {}
     stubs: list[StubbedFunction] = []
-    for path in sorted(source_dir.rglob("*.py")):
-        if "__pycache__" in path.parts:
-            continue
+    for path in sources:
         relative = path.relative_to(source_dir).as_posix()
         text = path.read_text(encoding="utf-8")
-        student, stubbed = strip_solutions(text, f"{SOURCE_PACKAGE}/{relative}")
-        files[relative] = HEADER.format(source=f"{SOURCE_PACKAGE}/{relative}") + student
+        student, stubbed = strip_solutions(text, f"{SOURCE_PACKAGE}/{relative}",
+                                           lambda qualname: exercise_of(relative, qualname, exercises))
+        made = [exercise_of(relative, name, exercises) for name in stubbed]
+        files[relative] = header(f"{SOURCE_PACKAGE}/{relative}", list(zip(stubbed, made))) + student
         module = ".".join([TARGET_PACKAGE, *Path(relative).with_suffix("").parts])
         module = module.removesuffix(".__init__")
-        stubs += [StubbedFunction(module, name) for name in stubbed]
+        stubs += [StubbedFunction(module, name, ex) for name, ex in zip(stubbed, made)]
     return files, stubs
 
 
@@ -188,45 +303,213 @@ def differences(wanted: dict[str, str], present: dict[str, str]) -> list[str]:
     return problems
 
 
-def write(files: dict[str, str], target_dir: Path) -> None:
-    """Replace ``target_dir`` by ``files``, built in a temporary folder first."""
-    target_dir.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=".exercises-", dir=target_dir.parent))
+# The record of what was written, and the refusal to overwrite anything else -----------
+def digest(data: bytes | str) -> str:
+    """SHA-256 of a file's bytes, line endings read as ``\n`` (a CRLF checkout is no edit)."""
+    if isinstance(data, str):
+        data = data.encode("utf-8")
+    return hashlib.sha256(data.replace(b"\r\n", b"\n")).hexdigest()
+
+
+def manifest_text(files: dict[str, str]) -> str:
+    """The record of ``files`` as the generator writes it: hashes only, no file's text."""
+    record = {
+        "about": "SHA-256 of each file tools/generate_exercises.py wrote in this folder. Before it writes "
+                 "again it compares the folder with these and refuses to overwrite a file that differs "
+                 "(someone's work); --force keeps a backup first.",
+        "sha256": {name: digest(text) for name, text in sorted(files.items())},
+    }
+    return json.dumps(record, indent=1) + "\n"
+
+
+def read_manifest(target_dir: Path) -> dict[str, str] | None:
+    """{relative path: SHA-256} recorded in ``target_dir``; None if absent or unreadable."""
     try:
-        for name, text in files.items():
+        record = json.loads((target_dir / MANIFEST).read_text(encoding="utf-8"))
+        hashes = record["sha256"]
+    except (OSError, ValueError, TypeError, KeyError):
+        return None
+    if not isinstance(hashes, dict) or not all(isinstance(k, str) and isinstance(v, str) for k, v in hashes.items()):
+        return None
+    return hashes
+
+
+def _is_cache(relative: Path) -> bool:
+    return any(part in CACHE_PARTS for part in relative.parts) or relative.suffix in CACHE_SUFFIXES
+
+
+def tree_hashes(target_dir: Path) -> dict[str, str]:
+    """{relative path: SHA-256} of every file in ``target_dir`` but the record and caches."""
+    if not target_dir.is_dir():
+        return {}
+    hashes = {}
+    for path in sorted(target_dir.rglob("*")):
+        relative = path.relative_to(target_dir)
+        if path.is_dir() or _is_cache(relative) or relative.as_posix() == MANIFEST:
+            continue
+        hashes[relative.as_posix()] = digest(path.read_bytes())
+    return hashes
+
+
+@dataclass(frozen=True)
+class Change:
+    """A file of the target folder that differs from the generator's: ``kind`` is
+    "edited", "added" or "deleted" (against the record), or "differs", "not generated" or
+    "missing" (against what the generator makes, when there is no record); ``path`` is
+    relative to the target folder."""
+
+    kind: str
+    path: str
+
+
+def changes_since_written(files: dict[str, str], target_dir: Path) -> tuple[list[Change], bool]:
+    """What overwriting ``target_dir`` with ``files`` would lose, and whether a record exists.
+
+    With a record (:data:`MANIFEST`), every file that differs from it; without one, every
+    file that differs from ``files``.  A folder holding no files (caches aside) loses nothing.
+    """
+    present = tree_hashes(target_dir)
+    recorded = read_manifest(target_dir)
+    has_record = recorded is not None
+    if not present:
+        return [], has_record
+    if recorded is None:
+        recorded = {name: digest(text) for name, text in files.items()}
+    added, deleted, edited = ("added", "deleted", "edited") if has_record else ("not generated", "missing", "differs")
+    changes = []
+    for name in sorted(set(present) | set(recorded)):
+        if name not in recorded:
+            changes.append(Change(added, name))
+        elif name not in present:
+            changes.append(Change(deleted, name))
+        elif present[name] != recorded[name]:
+            changes.append(Change(edited, name))
+    return changes, has_record
+
+
+class TreeHasEdits(RuntimeError):
+    """The target folder holds edits; the message names them and says how to keep or drop them."""
+
+    def __init__(self, target_dir: Path, changes: list[Change], has_record: bool):
+        self.target_dir, self.changes = Path(target_dir), changes
+        name = self.target_dir.name
+        compared = (f"what tools/generate_exercises.py last wrote there (recorded in {name}/{MANIFEST})"
+                    if has_record else
+                    f"what tools/generate_exercises.py would write (there is no record, {name}/{MANIFEST}, "
+                    "of what it last wrote)")
+        listed = "\n".join(f"  {c.kind}: {name}/{c.path}" for c in changes)
+        super().__init__(
+            f"{self.target_dir} holds edits, maybe a student's work: {len(changes)} file(s) differ from "
+            f"{compared}:\n{listed}\nNothing was written. To keep this work, leave {name}/ as it is (students "
+            f"check their code with `grader check <exercise>`). To replace it with fresh stubs anyway, run "
+            f"again with --force: the current {name}/ is first moved to a backup folder "
+            f"{name}.backup-<date>-<time>/ beside it.")
+
+
+def backup_path(target_dir: Path) -> Path:
+    """A new ``<target>.backup-YYYYmmdd-HHMMSS`` folder name beside ``target_dir``."""
+    stem = f"{target_dir.name}.backup-{time.strftime(BACKUP_STAMP)}"
+    candidate, number = target_dir.with_name(stem), 1
+    while candidate.exists():
+        number += 1
+        candidate = target_dir.with_name(f"{stem}-{number}")
+    return candidate
+
+
+def write(files: dict[str, str], target_dir: Path, force: bool = False) -> Path | None:
+    """Replace ``target_dir`` by ``files`` and their record (:data:`MANIFEST`).
+
+    The new folder is built beside it first.  If ``target_dir`` holds edits
+    (:func:`changes_since_written`), raise :class:`TreeHasEdits` and write nothing,
+    unless ``force``: then the old folder is moved to :func:`backup_path`, which is
+    returned (None when nothing needed keeping).
+    """
+    target_dir = Path(target_dir)
+    if target_dir.exists() and not target_dir.is_dir():
+        raise GeneratorError(f"{target_dir} is not a folder")
+    changes, has_record = changes_since_written(files, target_dir)
+    if changes and not force:
+        raise TreeHasEdits(target_dir, changes, has_record)
+    target_dir.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{target_dir.name}-new-", dir=target_dir.parent))
+    backup = old = None
+    try:
+        for name, text in {**files, MANIFEST: manifest_text(files)}.items():
             out = staging / name
             out.parent.mkdir(parents=True, exist_ok=True)
-            out.write_text(text, encoding="utf-8")
-        backup = target_dir.with_name(target_dir.name + ".old")
-        if target_dir.exists():
+            out.write_bytes(text.encode("utf-8"))
+        if target_dir.exists() and changes:
+            backup = backup_path(target_dir)
             target_dir.rename(backup)
+        elif target_dir.exists():  # only what the generator wrote (and caches): no one's work
+            old = Path(tempfile.mkdtemp(prefix=f".{target_dir.name}-old-", dir=target_dir.parent))
+            target_dir.rename(old / target_dir.name)
         staging.rename(target_dir)
-        shutil.rmtree(backup, ignore_errors=True)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+    return backup
+
+
+def check(files: dict[str, str], target_dir: Path) -> list[str]:
+    """What differs between ``target_dir`` and what the generator makes (its record included)."""
+    target_dir = Path(target_dir)
+    problems = differences(files, existing_files(target_dir))
+    name = target_dir.name
+    others = [p for p in tree_hashes(target_dir) if not p.endswith(".py")]
+    problems += [f"not generated: {name}/{p}" for p in others]
+    record = target_dir / MANIFEST
+    if not record.is_file():
+        problems.append(f"missing: {name}/{MANIFEST} (the record of what the generator wrote)")
+    elif record.read_bytes().replace(b"\r\n", b"\n") != manifest_text(files).encode("utf-8"):
+        problems.append(f"differs: {name}/{MANIFEST} (the record of what the generator wrote)")
+    changes, has_record = changes_since_written(files, target_dir)
+    if changes and has_record:
+        problems.append(f"edited since the generator last wrote {name}/ (perhaps a student's work): "
+                        + ", ".join(f"{c.path} ({c.kind})" for c in changes))
+    return problems
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--check", action="store_true", help="compare with exercises/ and exit 1 if stale")
+    parser.add_argument("--check", action="store_true",
+                        help="compare with exercises/ and exit 1 if it differs; writes nothing")
+    parser.add_argument("--force", action="store_true",
+                        help="overwrite an exercises/ holding edits, after moving it to "
+                             "exercises.backup-<date>-<time>/ beside it")
     parser.add_argument("--source", type=Path, default=REPO_ROOT / SOURCE_PACKAGE)
     parser.add_argument("--target", type=Path, default=REPO_ROOT / TARGET_PACKAGE)
     args = parser.parse_args(argv)
+    name = args.target.name
     try:
         files, stubs = generate(args.source)
-    except MarkerError as exc:
+    except GeneratorError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     if args.check:
-        problems = differences(files, existing_files(args.target))
+        problems = check(files, args.target)
         for problem in problems:
             print(problem, file=sys.stderr)
         if problems:
-            print("exercises/ is out of date: run `python -m tools.generate_exercises`", file=sys.stderr)
+            print(f"{name}/ differs from what tools/generate_exercises.py makes from {args.source.name}/.\n"
+                  f"If {args.source.name}/ changed, run `python -m tools.generate_exercises`: it refuses, naming "
+                  f"the files and writing nothing, when {name}/ holds edits made since it last wrote it "
+                  f"(perhaps a student's work). Add --force only if those edits are not wanted: it moves "
+                  f"{name}/ to a backup folder first.", file=sys.stderr)
             return 1
-        print(f"exercises/ is in sync: {len(files)} modules, {len(stubs)} stubs")
+        print(f"{name}/ is in sync: {len(files)} modules, {len(stubs)} stubs")
         return 0
-    write(files, args.target)
+    try:
+        backup = write(files, args.target, force=args.force)
+    except TreeHasEdits as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return REFUSED
+    except GeneratorError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    if backup is not None:
+        print(f"kept the edited {name}/ as {backup}")
     print(f"wrote {args.target}: {len(files)} modules, {len(stubs)} stubs")
     return 0
 

@@ -1,4 +1,6 @@
-# Generated from solutions/broadphase/__init__.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/broadphase/__init__.py on the instructor's
+# side.
 """Broad phase: from N bodies to the few candidate pairs worth a narrow-phase test.
 
 Every broad phase here takes an ``(N, 4)`` float array of world AABBs

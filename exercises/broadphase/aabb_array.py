@@ -1,4 +1,6 @@
-# Generated from solutions/broadphase/aabb_array.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/broadphase/aabb_array.py on the instructor's
+# side.
 """The input of every broad phase: an ``(N, 4)`` array of axis-aligned boxes.
 
 Row ``i`` is body ``i``'s world AABB ``[min_x, min_y, max_x, max_y]`` in metres.

@@ -1,4 +1,6 @@
-# Generated from solutions/broadphase/brute_force.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/broadphase/brute_force.py on the instructor's
+# side.
 """Brute force broad phase: test all C(N, 2) = N (N - 1) / 2 pairs.
 
 This is the oracle every other broad phase is tested against.  Its cost is quadratic:

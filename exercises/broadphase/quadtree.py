@@ -1,4 +1,7 @@
-# Generated from solutions/broadphase/quadtree.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Exercise file of the collision course: write the functions that raise NotImplementedError, then
+# check them with `grader check quadtree`.
+# Handed out with the course; generated from solutions/broadphase/quadtree.py on the instructor's
+# side.
 """Quadtree broad phase: adaptive cells, small where bodies are dense.
 
 Each node covers a rectangle ``bounds = (min_x, min_y, max_x, max_y)`` (m) and stores
@@ -248,7 +251,7 @@ class Quadtree:
         >>> print(tree.child_holding(tree.root, (1, 1, 2, 2)))   # touches mid_x = 2
         None
         """
-        raise NotImplementedError
+        raise NotImplementedError("write Quadtree.child_holding(), then run `grader check quadtree`")
 
     def insert(self, index: int, box) -> None:
         """Store body ``index`` with AABB ``box`` (m) by full containment.
@@ -271,7 +274,7 @@ class Quadtree:
         >>> tree.root.bodies, tree.root.children[0].bodies
         ([0], [1])
         """
-        raise NotImplementedError
+        raise NotImplementedError("write Quadtree.insert(), then run `grader check quadtree`")
 
     def split(self, leaf: QuadtreeNode) -> None:
         """Give ``leaf`` four children and move down every body a child holds.
@@ -288,7 +291,7 @@ class Quadtree:
         >>> tree.root.bodies, [child.bodies for child in tree.root.children]
         ([1], [[0], [], [], []])
         """
-        raise NotImplementedError
+        raise NotImplementedError("write Quadtree.split(), then run `grader check quadtree`")
 
     def pairs(self) -> set[tuple[int, int]]:
         """Overlapping-or-touching pairs ``(i, j)``, ``i < j``, among inserted bodies.
@@ -307,7 +310,7 @@ class Quadtree:
         >>> sorted(tree.pairs())
         [(0, 1)]
         """
-        raise NotImplementedError
+        raise NotImplementedError("write Quadtree.pairs(), then run `grader check quadtree`")
 
     # ------------------------------------------------------- inspection
     def nodes(self) -> Iterator[QuadtreeNode]:

@@ -1,4 +1,6 @@
-# Generated from solutions/broadphase/sorted_grid_numpy.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/broadphase/sorted_grid_numpy.py on the
+# instructor's side.
 """Vectorised grid broad phase for large scenes (scaffolding, not a student exercise).
 
 The readable grid of :mod:`solutions.broadphase.uniform_grid` loops over square cells.

@@ -1,4 +1,7 @@
-# Generated from solutions/broadphase/uniform_grid.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Exercise file of the collision course: write the functions that raise NotImplementedError, then
+# check them with `grader check grid`.
+# Handed out with the course; generated from solutions/broadphase/uniform_grid.py on the
+# instructor's side.
 """Uniform grid broad phase, in the two variants of the course notes.
 
 The plane is cut into square cells of side ``cell_size`` (m).  Cell ``(cx, cy)`` is
@@ -180,7 +183,7 @@ def pairs_grid_every_cell(aabbs, cell_size: float) -> set[tuple[int, int]]:
     >>> sorted(pairs_grid_every_cell([[0, 0, 1, 1], [1, 1, 2, 2], [3, 0, 4, 1]], 1.0))
     [(0, 1)]
     """
-    raise NotImplementedError
+    raise NotImplementedError("write pairs_grid_every_cell(), then run `grader check grid`")
 
 
 def pairs_grid_center_cell(aabbs, cell_size: float) -> set[tuple[int, int]]:
@@ -211,4 +214,4 @@ def pairs_grid_center_cell(aabbs, cell_size: float) -> set[tuple[int, int]]:
     >>> sorted(pairs_grid_center_cell([[0, 0, 1, 1], [1, 1, 2, 2], [0, 0, 9, 0.5]], 1.0))
     [(0, 1), (0, 2)]
     """
-    raise NotImplementedError
+    raise NotImplementedError("write pairs_grid_center_cell(), then run `grader check grid`")

@@ -1,4 +1,6 @@
-# Generated from solutions/narrowphase/__init__.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/narrowphase/__init__.py on the instructor's
+# side.
 """Narrow phase: boolean SAT tests and contact generation for pairs of world shapes.
 
 One concept per module: :mod:`.projection` (projecting onto a candidate axis),

@@ -1,4 +1,8 @@
-# Generated from solutions/narrowphase/aabb_aabb.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Exercise file of the collision course: write the functions that raise NotImplementedError, then
+# check them with `grader check sat` (aabbs_overlap) and `grader check contacts`
+# (collide_aabb_aabb).
+# Handed out with the course; generated from solutions/narrowphase/aabb_aabb.py on the instructor's
+# side.
 """AABB against AABB: SAT with the x and y axes only.
 
 Both boxes share their face normals (the world axes), and on those axes the projection
@@ -32,7 +36,7 @@ def aabbs_overlap(a: AABB, b: AABB) -> bool:
     >>> aabbs_overlap(AABB((0.0, 0.0), (1.0, 1.0)), AABB((1.0, 1.0), (2.0, 2.0)))
     True
     """
-    raise NotImplementedError
+    raise NotImplementedError("write aabbs_overlap(), then run `grader check sat`")
 
 
 def collide_aabb_aabb(a: AABB, b: AABB) -> Contact | None:
@@ -48,4 +52,4 @@ def collide_aabb_aabb(a: AABB, b: AABB) -> Contact | None:
     >>> contact.normal.tolist(), contact.depth, sorted(contact.points.tolist())
     ([0.0, 1.0], 0.5, [[1.0, 0.75], [2.0, 0.75]])
     """
-    raise NotImplementedError
+    raise NotImplementedError("write collide_aabb_aabb(), then run `grader check contacts`")

@@ -1,4 +1,6 @@
-# Generated from solutions/narrowphase/batch_sat.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/narrowphase/batch_sat.py on the instructor's
+# side.
 """Vectorised OBB-OBB overlap test for many pairs at once (numpy).
 
 The readable reference is :func:`solutions.narrowphase.polygon_polygon.obbs_overlap`,

@@ -1,4 +1,8 @@
-# Generated from solutions/narrowphase/circle_circle.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Exercise file of the collision course: write the functions that raise NotImplementedError, then
+# check them with `grader check sat` (circles_overlap) and `grader check contacts`
+# (collide_circle_circle).
+# Handed out with the course; generated from solutions/narrowphase/circle_circle.py on the
+# instructor's side.
 """Circle against circle: the simplest SAT case, with one axis (centre to centre).
 
 Two discs overlap or touch when the distance between their centres is at most the sum
@@ -36,7 +40,7 @@ def circles_overlap(a: Circle, b: Circle) -> bool:
     >>> circles_overlap(Circle((0.0, 0.0), 1.0), Circle((2.5, 0.0), 1.0))
     False
     """
-    raise NotImplementedError
+    raise NotImplementedError("write circles_overlap(), then run `grader check sat`")
 
 
 def collide_circle_circle(a: Circle, b: Circle) -> Contact | None:
@@ -53,4 +57,4 @@ def collide_circle_circle(a: Circle, b: Circle) -> Contact | None:
     >>> contact.normal.tolist(), contact.depth, contact.points.tolist()
     ([1.0, 0.0], 0.5, [[0.75, 0.0]])
     """
-    raise NotImplementedError
+    raise NotImplementedError("write collide_circle_circle(), then run `grader check contacts`")

@@ -1,4 +1,8 @@
-# Generated from solutions/narrowphase/circle_polygon.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Exercise file of the collision course: write the functions that raise NotImplementedError, then
+# check them with `grader check sat` (circle_polygon_overlap) and `grader check contacts`
+# (collide_circle_polygon).
+# Handed out with the course; generated from solutions/narrowphase/circle_polygon.py on the
+# instructor's side.
 """Circle against a convex polygonal shape (AABB, OBB or ConvexPolygon).
 
 SAT test.  A circle has infinitely many normals, yet only one extra candidate axis is
@@ -58,7 +62,7 @@ def circle_polygon_overlap(circle: Circle, polygon: Polygonal) -> bool:
     >>> circle_polygon_overlap(Circle((2.7, 2.7), 1.0), OBB((0.0, 0.0), (2.0, 2.0), 0.0))
     True
     """
-    raise NotImplementedError
+    raise NotImplementedError("write circle_polygon_overlap(), then run `grader check sat`")
 
 
 def collide_circle_polygon(circle: Circle, polygon: Polygonal) -> Contact | None:
@@ -85,7 +89,7 @@ def collide_circle_polygon(circle: Circle, polygon: Polygonal) -> Contact | None
     >>> contact.normal.tolist(), contact.depth, contact.points.tolist()
     ([0.0, -1.0], 0.5, [[0.0, 0.75]])
     """
-    raise NotImplementedError
+    raise NotImplementedError("write collide_circle_polygon(), then run `grader check contacts`")
 
 
 def collide_polygon_circle(polygon: Polygonal, circle: Circle) -> Contact | None:

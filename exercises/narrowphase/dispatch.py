@@ -1,4 +1,6 @@
-# Generated from solutions/narrowphase/dispatch.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/narrowphase/dispatch.py on the instructor's
+# side.
 """One entry point for any pair of world shapes, in either order.
 
 ``shapes_overlap(a, b)`` answers yes/no with the cheapest SAT test for the pair;

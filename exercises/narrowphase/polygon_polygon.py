@@ -1,4 +1,8 @@
-# Generated from solutions/narrowphase/polygon_polygon.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Exercise file of the collision course: write the functions that raise NotImplementedError, then
+# check them with `grader check sat` (polygons_overlap, obbs_overlap) and `grader check contacts`
+# (clip_segment_to_half_plane, reference_face_manifold, collide_polygon_polygon).
+# Handed out with the course; generated from solutions/narrowphase/polygon_polygon.py on the
+# instructor's side.
 """Convex polygon against convex polygon: SAT test, OBB-OBB test and contact manifold.
 
 Works for every polygonal shape (AABB, OBB, ConvexPolygon) through
@@ -155,7 +159,7 @@ def polygons_overlap(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | ConvexPolygo
     >>> polygons_overlap(triangle, OBB((1.0, 1.0), (0.5, 0.5), 0.3))
     True
     """
-    raise NotImplementedError
+    raise NotImplementedError("write polygons_overlap(), then run `grader check sat`")
 
 
 def obbs_overlap(a: OBB | AABB, b: OBB | AABB) -> bool:
@@ -184,7 +188,7 @@ def obbs_overlap(a: OBB | AABB, b: OBB | AABB) -> bool:
     >>> obbs_overlap(OBB((0.0, 0.0), (1.0, 1.0), 0.0), OBB((2.5, 0.0), (1.0, 1.0), 0.0))
     False
     """
-    raise NotImplementedError
+    raise NotImplementedError("write obbs_overlap(), then run `grader check sat`")
 
 
 def clip_segment_to_half_plane(points: list, plane_normal: np.ndarray, plane_offset: float,
@@ -219,7 +223,7 @@ def clip_segment_to_half_plane(points: list, plane_normal: np.ndarray, plane_off
     >>> [(p.tolist(), i) for p, i in clip_segment_to_half_plane(segment, np.array([1.0, 0.0]), 3.0)]
     [([0.0, 0.0], 'v0'), ([3.0, 0.0], 'v1')]
     """
-    raise NotImplementedError
+    raise NotImplementedError("write clip_segment_to_half_plane(), then run `grader check contacts`")
 
 
 def reference_face_manifold(ref_vertices: np.ndarray, ref_normal: np.ndarray, ref_face: int,
@@ -266,7 +270,7 @@ def reference_face_manifold(ref_vertices: np.ndarray, ref_normal: np.ndarray, re
     >>> [p.round(12).tolist() for p in points], [round(d, 12) for d in depths], ids
     ([[-0.5, -0.05], [0.5, -0.05]], [0.1, 0.1], [('A', 2, 0, 0), ('A', 2, 0, 1)])
     """
-    raise NotImplementedError
+    raise NotImplementedError("write reference_face_manifold(), then run `grader check contacts`")
 
 
 def collide_polygon_polygon(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | ConvexPolygon) -> Contact | None:
@@ -304,4 +308,4 @@ def collide_polygon_polygon(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | Conve
     >>> contact.normal.tolist(), round(contact.depth, 12), sorted(contact.points.round(12).tolist())
     ([0.0, 1.0], 0.1, [[-0.5, -0.05], [0.5, -0.05]])
     """
-    raise NotImplementedError
+    raise NotImplementedError("write collide_polygon_polygon(), then run `grader check contacts`")

@@ -1,4 +1,7 @@
-# Generated from solutions/narrowphase/projection.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Exercise file of the collision course: write the functions that raise NotImplementedError, then
+# check them with `grader check sat`.
+# Handed out with the course; generated from solutions/narrowphase/projection.py on the instructor's
+# side.
 """Projecting shapes onto a candidate separating axis: the building blocks of SAT.
 
 Separating axis theorem (2D, convex shapes): two convex shapes are disjoint if and only
@@ -54,7 +57,7 @@ def project_vertices(vertices, axis) -> tuple[float, float]:
     >>> project_vertices([[-6.0, -1.0], [-4.0, -1.0], [-4.0, 1.0], [-6.0, 1.0]], [1.0, 0.0])
     (-6.0, -4.0)
     """
-    raise NotImplementedError
+    raise NotImplementedError("write project_vertices(), then run `grader check sat`")
 
 
 def project_circle(center, radius: float, axis) -> tuple[float, float]:
@@ -84,7 +87,7 @@ def project_circle(center, radius: float, axis) -> tuple[float, float]:
     >>> project_circle([-10.0, 0.0], 1.0, [1.0, 0.0])
     (-11.0, -9.0)
     """
-    raise NotImplementedError
+    raise NotImplementedError("write project_circle(), then run `grader check sat`")
 
 
 def intervals_overlap(a, b) -> bool:
@@ -100,7 +103,7 @@ def intervals_overlap(a, b) -> bool:
     >>> intervals_overlap((0.0, 1.0), (1.0, 2.0))
     True
     """
-    raise NotImplementedError
+    raise NotImplementedError("write intervals_overlap(), then run `grader check sat`")
 
 
 def interval_overlap_depth(a, b) -> float:

@@ -1,4 +1,6 @@
-# Generated from solutions/narrowphase/speculative.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/narrowphase/speculative.py on the
+# instructor's side.
 """Speculative manifolds: contact points of polygons that touch, overlap, or nearly touch.
 
 The soft step (:mod:`solutions.response.soft_step`) finds contacts once per step and

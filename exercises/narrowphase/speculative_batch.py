@@ -1,4 +1,6 @@
-# Generated from solutions/narrowphase/speculative_batch.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/narrowphase/speculative_batch.py on the
+# instructor's side.
 """Speculative box-box manifolds for many pairs at once (numpy).
 
 The readable reference is

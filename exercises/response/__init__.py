@@ -1,4 +1,6 @@
-# Generated from solutions/response/__init__.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/response/__init__.py on the instructor's
+# side.
 """Collision response: what to do once two bodies are known to touch.
 
 - :mod:`.momentum_1d`: head-on collisions of two point masses (momentum, energy,

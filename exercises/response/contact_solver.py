@@ -1,4 +1,6 @@
-# Generated from solutions/response/contact_solver.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/response/contact_solver.py on the
+# instructor's side.
 """Sequential impulses: the iterative contact solver of box2d-lite, Box2D and Chipmunk.
 
 One impulse per contact point is not enough when contacts share bodies (a stack, a

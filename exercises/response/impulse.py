@@ -1,4 +1,6 @@
-# Generated from solutions/response/impulse.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Exercise file of the collision course: write the functions that raise NotImplementedError, then
+# check them with `grader check impulse`.
+# Handed out with the course; generated from solutions/response/impulse.py on the instructor's side.
 """One impulse at one contact point between two rigid bodies.
 
 Symbols (as in the book): ``n`` the unit contact normal, pointing from body A to body
@@ -126,7 +128,7 @@ def relative_normal_velocity(body_a: Body, body_b: Body, point, normal) -> float
     >>> relative_normal_velocity(ground, ball, (0.0, 0.5), (0.0, 1.0))
     -2.0
     """
-    raise NotImplementedError
+    raise NotImplementedError("write relative_normal_velocity(), then run `grader check impulse`")
 
 
 def effective_mass_inverse(body_a: Body, body_b: Body, point, normal) -> float:
@@ -160,7 +162,7 @@ def effective_mass_inverse(body_a: Body, body_b: Body, point, normal) -> float:
     >>> effective_mass_inverse(ground, ball, (0.0, 0.5), (0.0, 1.0))
     0.5
     """
-    raise NotImplementedError
+    raise NotImplementedError("write effective_mass_inverse(), then run `grader check impulse`")
 
 
 def normal_impulse_magnitude(body_a: Body, body_b: Body, point, normal, restitution: float) -> float:
@@ -196,7 +198,7 @@ def normal_impulse_magnitude(body_a: Body, body_b: Body, point, normal, restitut
     >>> normal_impulse_magnitude(ground, ball, (0.0, 0.5), (0.0, 1.0), 0.5)
     9.0
     """
-    raise NotImplementedError
+    raise NotImplementedError("write normal_impulse_magnitude(), then run `grader check impulse`")
 
 
 def apply_impulse(body_a: Body, body_b: Body, point, impulse_vector) -> None:
@@ -229,7 +231,7 @@ def apply_impulse(body_a: Body, body_b: Body, point, impulse_vector) -> None:
     >>> a.velocity.tolist(), b.velocity.tolist()
     ([-1.0, 0.0], [1.0, 0.0])
     """
-    raise NotImplementedError
+    raise NotImplementedError("write apply_impulse(), then run `grader check impulse`")
 
 
 def resolve_collision(body_a: Body, body_b: Body, contact: Contact,
@@ -281,4 +283,4 @@ def resolve_collision(body_a: Body, body_b: Body, contact: Contact,
     >>> normal_impulses.round(12).tolist(), box.velocity.round(12).tolist(), round(box.angular_velocity, 12)
     ([1.5, 1.5], [0.0, 1.0], 0.0)
     """
-    raise NotImplementedError
+    raise NotImplementedError("write resolve_collision(), then run `grader check impulse`")

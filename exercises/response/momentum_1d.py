@@ -1,4 +1,7 @@
-# Generated from solutions/response/momentum_1d.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Exercise file of the collision course: write the functions that raise NotImplementedError, then
+# check them with `grader check momentum`.
+# Handed out with the course; generated from solutions/response/momentum_1d.py on the instructor's
+# side.
 """Head-on collisions of two bodies moving along one line (point masses).
 
 Body 1 and body 2 move along the x axis with velocities ``v1`` and ``v2`` (m/s, signed:
@@ -96,7 +99,7 @@ def collision_1d(m1: float, v1: float, m2: float, v2: float, restitution: float)
     >>> collision_1d(0.2, 3.0, math.inf, 0.0, 0.5)
     (-1.5, 0.0)
     """
-    raise NotImplementedError
+    raise NotImplementedError("write collision_1d(), then run `grader check momentum`")
 
 
 def elastic_collision_1d(m1: float, v1: float, m2: float, v2: float) -> tuple[float, float]:
@@ -125,7 +128,7 @@ def elastic_collision_1d(m1: float, v1: float, m2: float, v2: float) -> tuple[fl
     >>> elastic_collision_1d(1.0, 2.0, 1.0, -1.0)
     (-1.0, 2.0)
     """
-    raise NotImplementedError
+    raise NotImplementedError("write elastic_collision_1d(), then run `grader check momentum`")
 
 
 def perfectly_inelastic_1d(m1: float, v1: float, m2: float, v2: float) -> float:
@@ -154,7 +157,7 @@ def perfectly_inelastic_1d(m1: float, v1: float, m2: float, v2: float) -> float:
     >>> round(perfectly_inelastic_1d(5000.0, 80.0, 1000.0, 60.0), 2)
     76.67
     """
-    raise NotImplementedError
+    raise NotImplementedError("write perfectly_inelastic_1d(), then run `grader check momentum`")
 
 
 def momentum(m: float, v):

@@ -1,4 +1,7 @@
-# Generated from solutions/response/positional_correction.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Exercise file of the collision course: write the functions that raise NotImplementedError, then
+# check them with `grader check impulse`.
+# Handed out with the course; generated from solutions/response/positional_correction.py on the
+# instructor's side.
 """Removing overlap by moving positions: linear projection.
 
 Detection is discrete (a posteriori), so bodies are usually found already overlapping
@@ -61,4 +64,4 @@ def correct_positions(body_a: Body, body_b: Body, normal, depth: float,
     >>> [round(float(x), 12) for x in (moved_a[0], moved_b[0], a.position[0], b.position[0])]
     [-0.06, 0.02, -0.06, 0.91]
     """
-    raise NotImplementedError
+    raise NotImplementedError("write correct_positions(), then run `grader check impulse`")

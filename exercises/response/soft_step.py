@@ -1,4 +1,6 @@
-# Generated from solutions/response/soft_step.py by tools/generate_exercises.py: edit solutions/, then run `python -m tools.generate_exercises`.
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/response/soft_step.py on the instructor's
+# side.
 """Soft step: sub-stepping with soft contacts and relaxation, after Box2D v3.
 
 A plain step finds contacts, solves velocities with many iterations and corrects

@@ -3,8 +3,13 @@
     grader grade SUBMISSIONS... --out DIR [--jobs N] [--regrade]
 
 Writes, for each submission, ``DIR/<id>/results.json`` in Gradescope's format (and
-``DIR/<id>/report.html`` when :mod:`grader.report` is there), then ``DIR/gradebook.csv``
-with one row per graded submission in ``DIR``.
+``DIR/<id>/report.html`` when :mod:`grader.report` is there, the instructor's page of
+every test), ``DIR/<id>/feedback.html`` (the student's page: only the tests Gradescope
+would show now, see :mod:`grader.feedback`; ``--after-due-date`` and ``--published``
+say what "now" is, ``--feedback-dir FEEDBACK`` adds a copy at
+``FEEDBACK/<id>/feedback.html``), then ``DIR/gradebook.csv`` with one row per graded
+submission in ``DIR``.  Feedback pages are written again on every run, for skipped
+submissions too, so a rerun with ``--after-due-date`` releases more without regrading.
 
 How a batch runs
 ----------------
@@ -78,6 +83,7 @@ REPO_ROOT = HERE.parent
 GRADEBOOK_NAME = "gradebook.csv"
 LOG_NAME = "grading_log.jsonl"
 REPORT_NAME = "report.html"
+FEEDBACK_NAME = "feedback.html"
 WORK_NAME = ".work"  # scratch folder of a run inside the output folder, removed after
 LOCK_NAME = ".grader.lock"
 #: Times a submission may lose its worker process before its remaining tests are given up.
@@ -185,10 +191,19 @@ def worker_main() -> int:
                 package = find_package(folder)
                 where = package.relative_to(folder).as_posix() if package != folder else "."
                 send({"event": "started", "job": number, "package": where})
-                done = iter(indices)
+                # pytest runs the tests in its own order (module paths sorted: hidden/ before
+                # public/), not the spec's: each result finds its index by the test's name.
+                index_of = {tests[i].name: i for i in indices}
+                unclaimed = list(indices)
 
-                def progress(result, done=done):
-                    send({"event": "test", "job": number, "index": next(done),
+                def progress(result, index_of=index_of, unclaimed=unclaimed):
+                    index = index_of.get(result.test.name)
+                    if index not in unclaimed:
+                        index = unclaimed[0] if unclaimed else None
+                    if index is None:
+                        return
+                    unclaimed.remove(index)
+                    send({"event": "test", "job": number, "index": index,
                           "outcome": result.outcome.to_dict(), "seconds": result.seconds})
 
                 run_tests(package, [tests[i] for i in indices], limits, slot, config["isolation"],
@@ -390,6 +405,44 @@ def write_student_report(results_path: Path, warn: Callable[[str], None]) -> Non
         warn(f"warning: no HTML report for {results_path.parent.name}: {type(exc).__name__}: {exc}")
 
 
+@dataclass(frozen=True)
+class FeedbackOptions:
+    """What the student feedback pages show, and where copies go.
+
+    ``html``: write ``feedback.html`` beside each results.json; ``folder``: also write
+    ``folder/<id>/feedback.html``; ``after_due_date`` and ``published``: show those
+    tests (see :mod:`grader.feedback`).
+    """
+
+    html: bool = True
+    folder: Path | None = None
+    after_due_date: bool = False
+    published: bool = False
+
+    @property
+    def wanted(self) -> bool:
+        return self.html or self.folder is not None
+
+
+def write_feedback(results_path: Path, submission_id: str, options: FeedbackOptions,
+                   warn: Callable[[str], None]) -> None:
+    """The student's ``feedback.html`` of one results.json (and its copy); never raises."""
+    if not options.wanted:
+        return
+    try:
+        from .feedback import write_feedback_report
+
+        targets = []
+        if options.html:
+            targets.append(results_path.parent / FEEDBACK_NAME)
+        if options.folder is not None:
+            targets.append(options.folder / submission_id / FEEDBACK_NAME)
+        for target in targets:
+            write_feedback_report(results_path, target, options.after_due_date, options.published)
+    except Exception as exc:  # feedback must not cost a grade
+        warn(f"warning: no feedback page for {submission_id}: {type(exc).__name__}: {exc}")
+
+
 @contextlib.contextmanager
 def _locked(out_dir: Path) -> Iterator[None]:
     handle = open(out_dir / LOCK_NAME, "a")
@@ -417,7 +470,8 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                       regrade: bool = False, limits: Limits = Limits(), isolation: str = "auto",
                       per_submission_seconds: float = DEFAULT_PER_SUBMISSION_SECONDS,
                       per_test_seconds: float = DEFAULT_PER_TEST_SECONDS, progress: bool = True,
-                      tests: list[TestSpec] | None = None, html: bool = True) -> list[dict]:
+                      tests: list[TestSpec] | None = None, html: bool = True, after_due_date: bool = False,
+                      published: bool = False, feedback_dir: str | os.PathLike | None = None) -> list[dict]:
     """Grade every submission at ``paths`` into ``out_dir``; skip what is already graded.
 
     Parameters
@@ -441,7 +495,14 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
     tests : list of TestSpec, optional
         The tests to run (default: the whole spec, public and hidden).
     html : bool
-        Also write the HTML reports when :mod:`grader.report` is there.
+        Also write the HTML reports: the instructor's (when :mod:`grader.report` is
+        there) and the student's feedback page.
+    after_due_date, published : bool
+        The feedback pages also show the tests Gradescope shows after the due date,
+        and after the grades are published (hidden tests: never).
+    feedback_dir : path, optional
+        Also write each feedback page to ``feedback_dir/<id>/feedback.html`` (even
+        without ``html``).
 
     Returns
     -------
@@ -468,6 +529,12 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
         raise GradingError(f"--out {out_dir} exists and is not a folder")
     out_dir.mkdir(parents=True, exist_ok=True)
     out_dir = out_dir.resolve()
+    if feedback_dir is not None:
+        feedback_dir = Path(feedback_dir).expanduser()
+        if feedback_dir.exists() and not feedback_dir.is_dir():
+            raise GradingError(f"--feedback-dir {feedback_dir} exists and is not a folder")
+        feedback_dir = feedback_dir.resolve()
+    feedback = FeedbackOptions(html, feedback_dir, after_due_date, published)
     bar = _progress_bar(len(submissions), 0, progress)
     warn = bar.write
     rows: dict[str, dict] = {}
@@ -501,6 +568,7 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                         rows[submission.id] = _row(submission, "skipped", previous, out_dir)
                         if html and not (results_path.parent / REPORT_NAME).exists():
                             write_student_report(results_path, warn)
+                        write_feedback(results_path, submission.id, feedback, warn)
                         bar.update(1)
                         continue
                     if not readable:
@@ -508,10 +576,11 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                                                submission_fingerprint, digest)
                         write_results(data, results_path)
                         log_graded(out_dir, submission.id, "refused", data)
+                        write_feedback(results_path, submission.id, feedback, warn)
                         rows[submission.id] = _row(submission, "refused", data, out_dir, data["output"])
                         bar.update(1)
                         continue
-                    todo.append(Job(len(todo), submission, submission_fingerprint, list(range(len(tests)))))
+                    todo.append(Job(len(todo), submission, submission_fingerprint, run_order(tests)))
                 workers, spare = workers[:len(todo)], workers[len(todo):]
                 _dismiss(spare)
                 if todo:
@@ -522,7 +591,8 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                         worker.configure(config)
 
                     def finished(job: Job, elapsed: float) -> None:
-                        rows[job.submission.id] = _finish(job, elapsed, tests, digest, out_dir, html, warn)
+                        rows[job.submission.id] = _finish(job, elapsed, tests, digest, out_dir, html, warn,
+                                                          feedback)
                         row = rows[job.submission.id]
                         score = f"{row['score']:g}/{row['max_score']:g}" if row["score"] is not None else row["state"]
                         bar.update(1)
@@ -544,7 +614,7 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
 
 
 def _finish(job: Job, elapsed: float, tests: list[TestSpec], digest: str, out_dir: Path, html: bool,
-            warn: Callable[[str], None]) -> dict:
+            warn: Callable[[str], None], feedback: FeedbackOptions | None = None) -> dict:
     """Write a finished job's results.json (and report); its summary row."""
     from .plugin import TestResult
 
@@ -568,6 +638,7 @@ def _finish(job: Job, elapsed: float, tests: list[TestSpec], digest: str, out_di
     log_graded(out_dir, submission.id, state, data)
     if html:
         write_student_report(results_path, warn)
+    write_feedback(results_path, submission.id, feedback or FeedbackOptions(html), warn)
     return _row(submission, state, data, out_dir, data["output"] if state == "refused" else "")
 
 
@@ -600,6 +671,13 @@ def read_grading_log(out_dir: str | os.PathLike) -> list[dict]:
         with contextlib.suppress(ValueError):
             entries.append(json.loads(line))
     return entries
+
+
+def run_order(tests: list[TestSpec]) -> list[int]:
+    """Indices of ``tests`` in the order :func:`grader.run.run_tests` runs them: module by
+    module (paths sorted), each module's tests in spec order.  A job's ``remaining``
+    keeps this order, so that its first item is the test a stopped worker was running."""
+    return sorted(range(len(tests)), key=lambda i: (tests[i].path, i))
 
 
 def select_tests(tests: list[TestSpec], patterns: str | None) -> list[TestSpec]:
@@ -810,6 +888,13 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
                         help="grade only the tests matching these comma-separated patterns, e.g. 'momentum.*,sat.*'")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--no-html", action="store_true", help="no HTML reports")
+    parser.add_argument("--after-due-date", action="store_true",
+                        help="feedback pages also show the tests Gradescope shows after the due date")
+    parser.add_argument("--published", action="store_true",
+                        help="feedback pages also show the tests Gradescope shows once grades are published, "
+                             "and the total score")
+    parser.add_argument("--feedback-dir", default=None, metavar="DIR",
+                        help="also write each student's feedback page to DIR/<submission id>/feedback.html")
 
 
 def main_grade(args: argparse.Namespace) -> int:
@@ -827,7 +912,10 @@ def main_grade(args: argparse.Namespace) -> int:
         rows = grade_submissions(args.submissions, args.out, jobs=args.jobs, regrade=args.regrade, limits=limits,
                                  isolation=args.isolation, per_submission_seconds=args.timeout_submission,
                                  per_test_seconds=args.timeout_test, progress=not args.no_progress,
-                                 html=not args.no_html, tests=tests)
+                                 html=not args.no_html, tests=tests,
+                                 after_due_date=getattr(args, "after_due_date", False),
+                                 published=getattr(args, "published", False),
+                                 feedback_dir=getattr(args, "feedback_dir", None))
     except (SubmissionPathError, GradingError, SpecError) as exc:
         print(f"grader grade: error: {exc}", file=sys.stderr)
         return 2
@@ -843,6 +931,10 @@ def main_grade(args: argparse.Namespace) -> int:
         elif row["state"] == "error":
             print(f"  {row['id']}: grader error (rerun to retry): {row['message']}")
     print(f"gradebook: {Path(args.out) / GRADEBOOK_NAME}")
+    if getattr(args, "feedback_dir", None):
+        shown = ["visible"] + (["after_due_date"] if args.after_due_date else []) \
+            + (["after_published"] if args.published else [])
+        print(f"feedback: {Path(args.feedback_dir) / '<submission>' / FEEDBACK_NAME} (tests shown: {', '.join(shown)})")
     return 1 if counts.get("error") else 0
 
 

@@ -10,7 +10,10 @@
   3.11 or newer with ``venv``, bubblewrap, and the pinned packages of
   ``requirements.txt`` into ``$AUTOGRADER_ROOT/venv``;
 - ``run_autograder``: run for every submission: grades ``$AUTOGRADER_ROOT/submission``
-  exactly as ``grader grade`` does and writes ``$AUTOGRADER_ROOT/results/results.json``;
+  exactly as ``grader grade`` does and writes ``$AUTOGRADER_ROOT/results/results.json``
+  (a zip written by ``grader submit``, or its files as Gradescope unpacks an uploaded
+  zip, is checked against its ``MANIFEST.json`` first, see :mod:`grader.submissions`;
+  an upload without one is graded as it is);
 - ``grader/`` (with the whole test spec, hidden tests included), ``solutions/`` (the
   reference engine the checks compare with; the sandbox never mounts it),
   ``pyproject.toml`` and ``requirements.txt`` (pins taken from ``pyproject.toml``).

@@ -31,6 +31,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from .figures import GOT_COLOR, EXPECTED_COLOR, figure_png_base64
+from .results import output_text
 
 RESULTS_NAME = "results.json"
 CLASS_REPORT_NAME = "class_report.html"
@@ -155,7 +156,7 @@ def read_tests(data: dict) -> list[ResultRow]:
         figure = extra.get("figure") if isinstance(extra.get("figure"), dict) else None
         entries.append(ResultRow(name=name, title=title, exercise=exercise,
                                  visibility=str(entry.get("visibility") or "visible"), score=score,
-                                 max_score=max_score, status=status, output=str(entry.get("output") or ""),
+                                 max_score=max_score, status=status, output=output_text(entry),
                                  metrics=metrics, figure=figure, seconds=_number(extra.get("seconds"))))
     return entries
 

@@ -12,10 +12,16 @@ The layout follows Gradescope's autograder specification::
 ``status`` is Gradescope's ``"passed"`` or ``"failed"``; the grader's finer status (not
 implemented yet, wrong answer, timeout, crashed, ...) leads the test's ``output``, a
 text a student can read: what was expected against what came back, and the speed and
-error figures, never a traceback of the grader.  Each test's ``extra_data`` keeps the
-data behind that text for the reports: ``test`` (the spec name), ``exercise``,
-``status`` (the finer status), ``fraction``, ``seconds``, ``metrics`` and ``figure``
-(plain data for :mod:`grader.figures`, or None).
+error figures, never a traceback of the grader.  A failed test with a picture of its
+failing case has that text as HTML instead (``"output_format": "html"``, which
+Gradescope renders): the text in a ``<pre>``, escaped, then the picture as an inline
+base64 PNG (left out, with a sentence saying so, when larger than
+:data:`PICTURE_LIMIT`).  Each test's ``extra_data`` keeps the data behind that text for
+the reports: ``test`` (the spec name), ``exercise``, ``status`` (the finer status),
+``fraction``, ``seconds``, ``metrics``, ``figure`` (plain data for
+:mod:`grader.figures`, or None), ``message`` (what the test found), ``printed`` (what
+the student's code printed) and, for an HTML output, ``output_text`` (the same output
+as plain text).
 
 The top-level ``max_score`` is not in Gradescope's list (it takes the total from the
 assignment's settings); it is kept for the gradebook and reports.  A test of the spec
@@ -28,15 +34,17 @@ previous file, the whole new one, or none.
 """
 from __future__ import annotations
 
+import html
 import json
 import math
 import os
+import re
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
-from .outcome import STATUS_MEANINGS, Outcome
+from .outcome import STATUS_MEANINGS, Outcome, capped
 from .spec import VISIBILITIES, TestSpec
 
 #: Gradescope's test statuses.
@@ -48,6 +56,10 @@ STATUS_WORDS["failed"] = "Wrong answer"
 OUTPUT_LIMIT = 12_000
 #: Largest figure (characters of JSON) kept in a test's extra_data.
 FIGURE_LIMIT = 300_000
+#: Largest picture (characters of base64 PNG) put into a test's HTML output.
+PICTURE_LIMIT = 300_000
+#: Gradescope's formats of an output string.
+OUTPUT_FORMATS = ("text", "html", "simple_format", "md", "ansi")
 RESULTS_NAME = "results.json"
 
 
@@ -143,22 +155,66 @@ def _figure(figure: dict | None) -> dict | None:
     return data
 
 
+def picture_html(figure: dict | None, alt: str, limit: int | None = None) -> str:
+    """The picture of a failing case as an ``<img>`` with an inline base64 PNG, or a
+    sentence saying why there is none (omitted, larger than ``limit`` characters of
+    base64 (default :data:`PICTURE_LIMIT`), could not be drawn).  Empty for no figure."""
+    if not figure:
+        return ""
+    limit = PICTURE_LIMIT if limit is None else limit
+    if figure.get("kind") == "omitted":
+        reason = str(figure.get("reason") or "it was left out")
+        return f"<p><em>No picture of the failing case: {html.escape(reason, quote=False)}.</em></p>"
+    try:
+        from .figures import figure_png_base64
+
+        data = figure_png_base64(figure)
+    except Exception as exc:  # a damaged figure must not cost the output
+        return (f"<p><em>The picture of the failing case could not be drawn "
+                f"({html.escape(type(exc).__name__, quote=False)}).</em></p>")
+    if len(data) > limit:
+        return (f"<p><em>The picture of the failing case was omitted: at {len(data) / 1000:.0f} KB it is "
+                f"larger than the {limit / 1000:.0f} KB allowed here.</em></p>")
+    return (f'<p>The failing case:</p><img alt="{html.escape(alt)}" style="max-width:100%" '
+            f'src="data:image/png;base64,{data}">')
+
+
+def html_output(text: str, figure: dict | None, alt: str) -> str:
+    """A test's output as HTML for Gradescope: the text (escaped, in ``<pre>``), then the picture."""
+    return f"<pre>{html.escape(text, quote=False)}</pre>\n{picture_html(figure, alt)}"
+
+
+def output_text(entry: dict) -> str:
+    """The plain-text output of a results.json test entry, whatever its ``output_format``."""
+    output = str(entry.get("output") or "")
+    if entry.get("output_format", "text") != "html":
+        return output
+    extra = entry.get("extra_data") if isinstance(entry.get("extra_data"), dict) else {}
+    if isinstance(extra.get("output_text"), str):
+        return extra["output_text"]
+    return html.unescape(re.sub(r"<[^>]*>", "", output)).strip()  # HTML written by someone else
+
+
 def results_entry(test: TestSpec, outcome: Outcome, seconds: float = 0.0) -> dict:
     """One entry of ``tests``: Gradescope's keys plus ``extra_data`` for the reports.
 
     The score follows the test's credit rule (:attr:`grader.plugin.TestResult.score`):
-    full points for a pass, partial points only for a test marked partial_credit.
+    full points for a pass, partial points only for a test marked partial_credit.  A
+    failed test with a figure gets an HTML output holding its picture (see the module
+    docstring); every other test a text output.
     """
     from .plugin import TestResult
 
     fraction = max(0.0, min(1.0, float(outcome.fraction)))
     score = round(TestResult(test, outcome, seconds).score, 6)
-    return {
+    text = student_output(outcome, score, test.points)
+    figure = _figure(outcome.figure)
+    entry = {
         "name": test.title,
         "score": score,
         "max_score": float(test.points),
         "status": "passed" if outcome.status == "passed" else "failed",
-        "output": student_output(outcome, score, test.points),
+        "output": text,
         "output_format": "text",
         "visibility": test.visibility,
         "tags": [test.exercise],
@@ -169,11 +225,17 @@ def results_entry(test: TestSpec, outcome: Outcome, seconds: float = 0.0) -> dic
             "fraction": fraction,
             "seconds": round(float(seconds), 4),
             "metrics": plain(outcome.metrics or {}),
-            "figure": _figure(outcome.figure),
+            "figure": figure,
+            "message": capped(outcome.message or "", OUTPUT_LIMIT),
             "printed": (getattr(outcome, "output", "") or "")[:OUTPUT_LIMIT],
             "leaderboard": test.leaderboard,
         },
     }
+    if figure is not None and outcome.status != "passed":
+        entry["output"] = html_output(text, figure, f"the failing case of {test.title}")
+        entry["output_format"] = "html"
+        entry["extra_data"]["output_text"] = text
+    return entry
 
 
 def leaderboard(entries: list[tuple[TestSpec, Outcome]]) -> list[dict]:
@@ -330,6 +392,8 @@ def check_results(data: dict) -> list[str]:
             problems.append(f"{where}.status {test['status']!r} is not one of {GRADESCOPE_STATUSES}")
         if "output" in test and not isinstance(test["output"], str):
             problems.append(f"{where}.output must be a string")
+        if "output_format" in test and test["output_format"] not in OUTPUT_FORMATS:
+            problems.append(f"{where}.output_format {test['output_format']!r} is not one of {OUTPUT_FORMATS}")
         if "visibility" in test and test["visibility"] not in VISIBILITIES:
             problems.append(f"{where}.visibility {test['visibility']!r} is not one of {VISIBILITIES}")
         if "tags" in test and not (isinstance(test["tags"], list) and all(isinstance(t, str) for t in test["tags"])):

@@ -18,6 +18,20 @@ or another special file, is encrypted, or when the archive holds too many files 
 expands to too many bytes (a zip bomb: the bytes are counted as they are written, not
 taken from the headers).  Nothing outside the destination folder is ever written.
 
+Hand-in manifests
+-----------------
+``grader submit`` (:mod:`grader.submit`) writes ``MANIFEST.json`` at the top of the zip,
+next to ``exercises/``: the sha256 and size of every file it put in.  When a submission
+holds one (an archive, or a folder such as Gradescope's unpacked upload), :func:`opened`
+checks it with :func:`verify_manifest` before anything is graded: every listed file must
+be there with the same size and hash, and no other file may be (``__pycache__``, ``.pyc``
+and the litter of :data:`IGNORED_NAMES` aside: the grader never reads them).  A
+submission that fails is refused, and the message says which file was changed, removed
+or added after ``grader submit`` wrote the zip.  The manifest is a check against
+accidents (a file edited or added after submitting, a damaged upload), not a signature:
+whoever holds the files can write a new one.  Submissions without a manifest are graded
+as before.
+
 Examples
 --------
 >>> submission_id("Alice Smith (late).zip")
@@ -28,6 +42,7 @@ Examples
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import re
 import shutil
@@ -51,6 +66,15 @@ RESERVED_IDS = frozenset({"gradebook.csv", "index.html", "report.html", "class_r
 #: Folders and files that are not part of what was handed in (editor and OS litter).
 IGNORED_NAMES = frozenset({"__pycache__", "__MACOSX", ".DS_Store"})
 CHUNK = 1 << 16  # bytes read at a time
+#: The hand-in manifest ``grader submit`` writes at the top of the zip, and its format.
+MANIFEST_NAME = "MANIFEST.json"
+MANIFEST_FORMAT = "collision-course-submission"
+MANIFEST_VERSION = 1
+COURSE_NAME = "collision-course"
+#: Largest manifest read (bytes).
+MAX_MANIFEST_BYTES = 4 * 1024**2
+#: What to do when a manifest does not match (appended to every such refusal).
+RESUBMIT = "run `grader submit` again and hand in the zip it writes, unchanged"
 
 
 class SubmissionRefused(Exception):
@@ -292,7 +316,6 @@ def _empty(folder: Path) -> None:
             entry.unlink(missing_ok=True)
 
 
-# Opening ----------------------------------------------------------------------------------
 def find_package(folder: Path) -> Path:
     """The ``exercises`` package in a submission folder, or SubmissionRefused saying what is there."""
     from .run import package_folder
@@ -308,12 +331,126 @@ def find_package(folder: Path) -> Path:
                             f"__init__.py), or a zip of it. Your submission holds: {seen}") from None
 
 
+# Manifests --------------------------------------------------------------------------------
+def _ignored(parts: tuple[str, ...]) -> bool:
+    """Files no part of the grader reads: caches, compiled files, editor and OS litter."""
+    return any(p in IGNORED_NAMES for p in parts) or parts[-1].endswith(".pyc")
+
+
+def read_manifest(path: Path) -> dict:
+    """The manifest at ``path``, checked for shape; SubmissionRefused if it is damaged."""
+    def damaged(why: str) -> SubmissionRefused:
+        return SubmissionRefused(f"{MANIFEST_NAME} is damaged ({why}); {RESUBMIT}")
+
+    try:
+        info = os.lstat(path)
+        if not stat.S_ISREG(info.st_mode):
+            raise damaged("it is not a regular file")
+        if info.st_size > MAX_MANIFEST_BYTES:
+            raise damaged(f"{info.st_size} bytes, at most {MAX_MANIFEST_BYTES} are read")
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise damaged(f"not readable JSON: {exc}") from None
+    if not isinstance(data, dict) or data.get("format") != MANIFEST_FORMAT:
+        raise damaged(f"not a manifest written by `grader submit`: no \"format\": \"{MANIFEST_FORMAT}\"")
+    if data.get("format_version") != MANIFEST_VERSION:
+        raise SubmissionRefused(f"{MANIFEST_NAME} has format version {data.get('format_version')!r}; this grader "
+                                f"reads version {MANIFEST_VERSION}: update your course files, then {RESUBMIT}")
+    if data.get("course") != COURSE_NAME:
+        raise SubmissionRefused(f"{MANIFEST_NAME} was written for the course {data.get('course')!r}, not "
+                                f"{COURSE_NAME!r}: hand in the zip of this course's exercises")
+    files = data.get("files")
+    if not isinstance(files, list) or len(files) > MAX_FILES:
+        raise damaged("its \"files\" is not a list of at most "
+                      f"{MAX_FILES} entries")
+    seen = set()
+    for entry in files:
+        if not (isinstance(entry, dict) and isinstance(entry.get("path"), str)
+                and isinstance(entry.get("sha256"), str) and isinstance(entry.get("size"), int)
+                and not isinstance(entry.get("size"), bool)):
+            raise damaged(f"an entry of \"files\" is not {{path, sha256, size}}: {_shown(str(entry))}")
+        parts = PurePosixPath(entry["path"]).parts
+        if (not parts or entry["path"].startswith("/") or "\\" in entry["path"] or ".." in parts or "." in parts
+                or parts == (MANIFEST_NAME,)):
+            raise damaged(f"it lists an impossible path {_shown(entry['path'])}")
+        if parts in seen:
+            raise damaged(f"it lists {_shown(entry['path'])} twice")
+        seen.add(parts)
+    return data
+
+
+def manifest_folder(folder: Path) -> Path | None:
+    """The folder whose ``MANIFEST.json`` describes the submission in ``folder``: the
+    folder itself, or the one holding its ``exercises`` package; None if there is none."""
+    folder = Path(folder)
+    if os.path.lexists(folder / MANIFEST_NAME):
+        return folder
+    try:
+        package = find_package(folder)
+    except SubmissionRefused:
+        return None
+    base = package.parent
+    if base != folder and folder in base.parents and os.path.lexists(base / MANIFEST_NAME):
+        return base
+    return None
+
+
+def verify_manifest(folder: str | os.PathLike) -> dict | None:
+    """Check the submission in ``folder`` against its ``MANIFEST.json`` (see the module
+    docstring); the manifest, or None when there is none.  Raises SubmissionRefused
+    naming the first difference (and how many more there are)."""
+    base = manifest_folder(Path(folder))
+    if base is None:
+        return None
+    manifest = read_manifest(base / MANIFEST_NAME)
+    listed = {tuple(PurePosixPath(e["path"]).parts): e for e in manifest["files"]}
+    present: dict[tuple[str, ...], Path] = {}
+    problems: list[str] = []
+    for root, dirs, files in os.walk(base):
+        here = Path(root)
+        for name in sorted(dirs + files):
+            full = here / name
+            parts = full.relative_to(base).parts
+            shown = _shown("/".join(parts))
+            mode = os.lstat(full).st_mode
+            if stat.S_ISLNK(mode):
+                problems.append(f"{shown} is a symbolic link; `grader submit` never puts links in the zip")
+            elif stat.S_ISDIR(mode) or parts == (MANIFEST_NAME,) or _ignored(parts):
+                continue
+            elif not stat.S_ISREG(mode):
+                problems.append(f"{shown} is not a regular file")
+            else:
+                present[parts] = full
+        dirs[:] = sorted(d for d in dirs if d not in IGNORED_NAMES and not os.path.islink(here / d))
+    for parts, entry in listed.items():
+        shown = _shown("/".join(parts))
+        path = present.get(parts)
+        if path is None:
+            problems.append(f"file {shown} is listed in {MANIFEST_NAME} but missing: it was removed after "
+                            "`grader submit` wrote the zip")
+        elif path.stat().st_size != entry["size"] or _file_digest(path) != entry["sha256"].lower():
+            problems.append(f"file {shown} was changed after `grader submit` wrote the zip (its size or sha256 "
+                            f"differs from {MANIFEST_NAME})")
+    for parts in sorted(set(present) - set(listed)):
+        problems.append(f"file {_shown('/'.join(parts))} is not in {MANIFEST_NAME}: it was added after "
+                        "`grader submit` wrote the zip")
+    if problems:
+        more = f" (and {len(problems) - 1} more difference{'s' if len(problems) > 2 else ''})" \
+            if len(problems) > 1 else ""
+        raise SubmissionRefused(f"{problems[0]}{more}; {RESUBMIT}")
+    return manifest
+
+
+# Opening ----------------------------------------------------------------------------------
 @contextmanager
-def opened(submission: Submission, workdir: str | os.PathLike | None = None) -> Iterator[Path]:
+def opened(submission: Submission, workdir: str | os.PathLike | None = None,
+           verify: bool = True) -> Iterator[Path]:
     """The submission as a folder to grade (a temporary copy for an archive), removed after.
 
     A folder holding no package but exactly one zip archive is taken as that archive
-    (a student who uploads the archive itself to Gradescope, say).
+    (a student who uploads the archive itself to Gradescope, say).  With ``verify``,
+    a submission holding a ``MANIFEST.json`` is checked against it first
+    (:func:`verify_manifest`; SubmissionRefused if it does not match).
     """
     path = submission.path
     if submission.kind == "folder":
@@ -323,14 +460,18 @@ def opened(submission: Submission, workdir: str | os.PathLike | None = None) -> 
         except SubmissionRefused:
             archives = [p for p in path.iterdir() if p.suffix.lower() == ".zip" and p.is_file()]
         if len(archives) == 1:
-            with opened(Submission(submission.id, archives[0], "zip"), workdir) as folder:
+            with opened(Submission(submission.id, archives[0], "zip"), workdir, verify) as folder:
                 yield folder
         else:
+            if verify:
+                verify_manifest(path)
             yield path
         return
     folder = Path(tempfile.mkdtemp(prefix="submission-", dir=workdir))
     try:
         safe_extract(path, folder)
+        if verify:
+            verify_manifest(folder)
         yield folder
     finally:
         shutil.rmtree(folder, ignore_errors=True)

@@ -25,7 +25,9 @@ result as soon as it is known, so the parent can enforce two hard limits itself:
 - **per submission** (``per_submission_seconds``): tests not started in time are
   scored as timeouts ("not run").
 
-Each call into student code also has its own timeout (``Limits.call_timeout``).
+Each call into student code also has its own timeout (``Limits.call_timeout``).  Both
+limits are scaled by :func:`grader.calibration.slowdown`, measured when the batch
+starts: on a loaded machine they grow (up to four times), so honest work is not cut off.
 
 Resuming
 --------
@@ -70,6 +72,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
+from .calibration import slowdown
 from .outcome import Outcome
 from .results import (RESULTS_NAME, build_results, read_results, refused_results, write_results,
                       write_text_atomic)
@@ -598,7 +601,15 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                         bar.update(1)
                         bar.set_postfix_str(f"{job.submission.id}: {score}")
 
-                    _run_jobs(todo, workers, config, work, per_test_seconds, per_submission_seconds, finished, warn)
+                    # Limits in wall-clock seconds, scaled by how loaded the machine is now
+                    # (grader.calibration): a busy machine must not fail honest work.
+                    factor = slowdown()
+                    if factor > 1.05:
+                        warn(f"note: this machine runs {factor:.1f}x slower than an idle one now; time limits "
+                             f"scaled to {per_test_seconds * factor:g} s per test and "
+                             f"{per_submission_seconds * factor:g} s per submission")
+                    _run_jobs(todo, workers, config, work, per_test_seconds * factor, per_submission_seconds * factor,
+                              finished, warn)
                     workers = []
             finally:
                 _dismiss(workers)  # those not handed to _run_jobs (nothing to grade, or an error)

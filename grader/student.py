@@ -71,6 +71,9 @@ class StudentCode:
         self._printed: list[str] = []
         self._printed_size = 0
 
+    def __repr__(self) -> str:  # how Hypothesis's "falsifying example" names this argument
+        return f"<the {self.package} package under test>"
+
     def take_output(self) -> str:
         """What the student's code printed since the last call of this (capped)."""
         text = "".join(self._printed)

@@ -22,6 +22,9 @@ SUBCOMMANDS = {
     "example-class": ("grader.example_class", "add_example_class_arguments", "main_example_class",
                       "write the bundled example class of submissions"),
     "similarity": ("grader.similarity", "add_similarity_arguments", "main_similarity", "flag nearly identical code"),
+    "submit": ("grader.submit", "add_submit_arguments", "main_submit", "write the zip to hand in (with a manifest)"),
+    "release": ("grader.release", "add_release_arguments", "main_release",
+                "write the student edition and the Gradescope autograder"),
 }
 
 
@@ -40,7 +43,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="grader", description="Autograder of the collision course.")
     commands = parser.add_subparsers(dest="command", required=True)
     for name, (module_name, add_arguments, main_name, help_text) in SUBCOMMANDS.items():
-        module = importlib.import_module(module_name)
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as exc:
+            if exc.name != module_name:
+                raise
+            continue  # not in this copy (the student edition holds the student commands only)
         sub = commands.add_parser(name, help=help_text, description=help_text)
         getattr(module, add_arguments)(sub)
         sub.set_defaults(handler=getattr(module, main_name))

@@ -474,8 +474,12 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                       per_submission_seconds: float = DEFAULT_PER_SUBMISSION_SECONDS,
                       per_test_seconds: float = DEFAULT_PER_TEST_SECONDS, progress: bool = True,
                       tests: list[TestSpec] | None = None, html: bool = True, after_due_date: bool = False,
-                      published: bool = False, feedback_dir: str | os.PathLike | None = None) -> list[dict]:
+                      published: bool = False, feedback_dir: str | os.PathLike | None = None,
+                      calibrate: bool = True) -> list[dict]:
     """Grade every submission at ``paths`` into ``out_dir``; skip what is already graded.
+
+    ``calibrate=False`` keeps the time limits as given (else they are scaled by how
+    loaded the machine is, :mod:`grader.calibration`).
 
     Parameters
     ----------
@@ -603,7 +607,7 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
 
                     # Limits in wall-clock seconds, scaled by how loaded the machine is now
                     # (grader.calibration): a busy machine must not fail honest work.
-                    factor = slowdown()
+                    factor = slowdown() if calibrate else 1.0
                     if factor > 1.05:
                         warn(f"note: this machine runs {factor:.1f}x slower than an idle one now; time limits "
                              f"scaled to {per_test_seconds * factor:g} s per test and "

@@ -360,7 +360,7 @@ def test_a_hanging_test_times_out_and_the_submission_goes_on(tmp_path, spec):
                      "def collision_1d(m1, v1, m2, v2, restitution):\n    while True:\n        pass\n")
     tests = [t for t in spec if t.name in ("momentum.elastic", "momentum.restitution", "momentum.perfectly_inelastic")]
     row = grade_submissions([submission], tmp_path / "out", tests=tests, limits=Limits(call_timeout=60.0),
-                            per_test_seconds=1.5, per_submission_seconds=2.5, progress=False)[0]
+                            per_test_seconds=1.5, per_submission_seconds=2.5, progress=False, calibrate=False)[0]
     assert row["state"] == "graded" and row["score"] == 0
     by_name = {t["extra_data"]["test"]: t for t in row["results"]["tests"]}
     assert by_name["momentum.elastic"]["extra_data"]["status"] == "timeout"
@@ -505,15 +505,20 @@ def test_a_folder_holding_one_zip_is_graded_as_that_zip(tmp_path):
 
 # Results: the Gradescope entries -----------------------------------------------------------
 def test_partial_credit_and_strict_json(spec):
-    test = next(t for t in spec if t.points >= 2)
-    outcome = Outcome.failed("expected [0, 1], got [0, -1]", fraction=0.5, seconds=float("nan"), missed_pairs=2)
-    entry = gs_results.results_entry(test, outcome, 0.1)
-    assert entry["score"] == pytest.approx(test.points / 2) and entry["status"] == "failed"
-    assert entry["output"].startswith(f"Partly right: {test.points / 2:g} / {test.points:g} points")
+    partial = next(t for t in spec if t.partial_credit and t.points >= 2)
+    strict = next(t for t in spec if not t.partial_credit and t.points >= 2)
+    outcome = Outcome.failed("expected [0, 1], got [0, -1]", fraction=0.95, seconds=float("nan"), missed_pairs=2)
+    entry = gs_results.results_entry(partial, outcome, 0.1)
+    # 95 % right cases: half the points at 90 %, rising linearly towards full points at 100 %.
+    assert entry["score"] == pytest.approx(partial.points * 0.75) and entry["status"] == "failed"
+    assert entry["output"].startswith(f"Partly right: {partial.points * 0.75:g} / {partial.points:g} points")
     assert "expected [0, 1], got [0, -1]" in entry["output"]
     assert entry["extra_data"]["metrics"]["seconds"] is None
     json.dumps(entry, allow_nan=False)
     assert plain({"a": float("inf"), "b": [1, 2.5]}) == {"a": None, "b": [1, 2.5]}
+    # A test without partial credit, or a share below 90 %, earns nothing for a failure.
+    assert gs_results.results_entry(strict, outcome, 0.1)["score"] == 0
+    assert gs_results.results_entry(partial, Outcome.failed("x", fraction=0.89), 0.1)["score"] == 0
 
 
 def test_a_wrong_answer_never_reaches_the_leaderboard(spec):
@@ -537,3 +542,18 @@ def test_gradebook_of_an_empty_folder_is_a_header(tmp_path, spec):
     path = write_gradebook(tmp_path, spec)
     assert path.read_text().splitlines() == [",".join(["submission", "score", "max_score",
                                                         *(t.name for t in spec), "state", "note"])]
+
+
+def test_time_limits_scale_with_the_measured_slowdown(tmp_path, spec, monkeypatch):
+    from grader import calibration, grade
+
+    assert 1.0 <= calibration.slowdown(runs=2) <= calibration.MAX_SLOWDOWN
+    monkeypatch.setattr(grade, "slowdown", lambda: 2.0)  # a machine twice as slow as idle
+    submission = folder_submission(tmp_path / "hana")
+    with open(submission / "exercises" / "response" / "momentum_1d.py", "a") as handle:
+        handle.write("\n\ndef elastic_collision_1d(m1, v1, m2, v2):\n    while True:\n        pass\n")
+    tests = [t for t in spec if t.name == "momentum.elastic"]
+    row = grade_submissions([submission], tmp_path / "out", tests=tests, limits=Limits(call_timeout=60.0),
+                            per_test_seconds=1.0, per_submission_seconds=5.0, progress=False)[0]
+    test = row["results"]["tests"][0]
+    assert test["extra_data"]["status"] == "timeout" and "longer than 2 s" in test["output"]

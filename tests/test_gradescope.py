@@ -55,7 +55,8 @@ def test_archive_holds_what_gradescope_needs_at_its_top(archive):
     with zipfile.ZipFile(archive) as handle:
         infos = {info.filename: info for info in handle.infolist()}
     for name in ("setup.sh", "run_autograder", "requirements.txt", "pyproject.toml", "grader/__init__.py",
-                 "grader/grade.py", "grader/worker.py", "grader/spec/public.toml", "grader/spec/hidden.toml",
+                 "grader/grade.py", "grader/worker.py", "grader/plugin.py", "grader/tests/pytest.ini",
+                 "grader/tests/conftest.py", "grader/tests/public/test_momentum.py", "grader/tests/hidden/test_grid.py",
                  "solutions/__init__.py"):
         assert name in infos, name
     for script in ("setup.sh", "run_autograder"):
@@ -92,10 +93,11 @@ def test_run_autograder_gives_the_reference_full_marks(archive, tmp_path):
     root = fake_root(tmp_path, archive)
     shutil.copytree(REPO / "solutions", root / "submission" / "exercises", ignore=IGNORE)
     # Proof that the bundled grader runs, not this checkout: change a weight in the copy.
-    public = root / "source" / "grader" / "spec" / "public.toml"
+    public = root / "source" / "grader" / "tests" / "public" / "test_momentum.py"
     text = public.read_text()
-    assert text.index('name = "momentum.elastic"') < text.index("points = 2")
-    public.write_text(text.replace('points = 2\nvisibility = "visible"', 'points = 5\nvisibility = "visible"', 1))
+    marked = "@pytest.mark.points(2)\ndef test_elastic("
+    assert marked in text
+    public.write_text(text.replace(marked, "@pytest.mark.points(5)\ndef test_elastic("))
     completed = run_autograder(root)
     assert completed.returncode == 0, completed.stdout + completed.stderr
     data = json.loads((root / "results" / "results.json").read_text())

@@ -1,0 +1,162 @@
+"""Contacts, hidden side: expected contacts from the reference engine.
+
+A random pair is used only when its contact is not a free choice: the reference gives
+the same contact for (A, B) as for (B, A) flipped (so the 2 % preference for A's
+reference face does not decide it), and pymunk does not find the pair within 1e-7 m
+of touching.  Every returned field is compared
+(:func:`grader.oracles.narrowphase_answers.contact_problem`).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import solutions.shapes
+from solutions.narrowphase.aabb_aabb import collide_aabb_aabb
+from solutions.narrowphase.dispatch import collide
+
+from grader import codec
+from grader.credit import check_cases
+from grader.oracles import narrowphase_cases as cases
+from grader.oracles import plain
+from grader.oracles import random_cases as rc
+from grader.oracles.narrowphase_answers import call_text, contact_problem, pair_figure
+from grader.oracles.pymunk_geometry import definite_overlap
+
+AABBS = "narrowphase.aabb_aabb"
+CIRCLES = "narrowphase.circle_circle"
+CIRCLE_POLYGON = "narrowphase.circle_polygon"
+POLYGONS = "narrowphase.polygon_polygon"
+FUNCTIONS = {("Circle", "Circle"): (CIRCLES, "collide_circle_circle"),
+             ("Circle", "polygon"): (CIRCLE_POLYGON, "collide_circle_polygon"),
+             ("polygon", "polygon"): (POLYGONS, "collide_polygon_polygon")}
+
+
+def reference(shape: dict):
+    return codec.decode_shape(shape, solutions.shapes)
+
+
+def reference_contact(a: dict, b: dict, routine=collide) -> dict | None:
+    return codec.encode_contact(routine(reference(a), reference(b)))
+
+
+def same(c1: dict | None, c2: dict | None) -> bool:
+    if c1 is None or c2 is None:
+        return c1 is None and c2 is None
+    return contact_problem(c1, c2, atol=1e-9) is None
+
+
+def defined_reference_contact(a: dict, b: dict):
+    """The reference contact, or False when the pair is near touching or the contact
+    depends on the order of A and B (a free choice of the method)."""
+    if definite_overlap(a, b) is None:
+        return False
+    want = reference_contact(a, b)
+    back = reference_contact(b, a)
+    if back is not None:
+        back = dict(back, normal=[0.0 - v for v in back["normal"]])
+    return want if same(want, back) else False
+
+
+def check_contacts(student, module: str, function: str, batch: list[tuple], label: str) -> None:
+    answers = student.call_many(module, function, [(a, b) for a, b, _, _ in batch])
+
+    def problem_of(case):
+        (a, b, want, note), got = case
+        problem = contact_problem(got, want)
+        return None if problem is None else f"{problem} [{note}]"
+
+    check_cases(zip(batch, answers), problem_of, label,
+                describe=lambda case: call_text(function, case[0][0], case[0][1]),
+                figure_of=lambda case: pair_figure(case[0][0], case[0][1], f"{function}: {case[0][3]}",
+                                                   case[0][2], case[1]))
+
+
+@pytest.mark.points(1)
+@pytest.mark.visibility("after_published")
+def test_aabb_aabb(student):
+    """Contact between two AABBs"""
+    rng = np.random.default_rng(405)
+
+    def box(spread=1.0):
+        return plain.aabb_from_center(rng.uniform(-spread, spread, 2), rng.uniform(0.3, 1, 2))
+
+    pairs = [(box(), box()) for _ in range(60)]
+    pairs += [(cases.translated(box(), (-20, -15)), cases.translated(box(), (-20, -15))) for _ in range(15)]
+    pairs += [(cases.translated(box(), (30, 12)), cases.translated(box(), (30, 12))) for _ in range(15)]
+    batch = [(a, b, reference_contact(a, b, collide_aabb_aabb), "axis-aligned boxes") for a, b in pairs
+             if definite_overlap(a, b) is not None]
+    # Touching exactly: along a stretch (two points) and corner to corner (one point, as
+    # the docstring says), on every side of A.
+    for k in range(12):
+        a, b, _ = cases.random_touching_boxes(rng, corner=k % 3 == 0, kinds=("aabb", "aabb"))
+        batch.append((a, b, reference_contact(a, b, collide_aabb_aabb), "touching exactly: depth 0"))
+    if not (any(c[2] is None for c in batch) and any(c[2] is not None and len(c[2]["points"]) == 1 for c in batch)):
+        raise RuntimeError("the AABB cases must include apart boxes and corners touching (a problem of the test)")
+    check_contacts(student, AABBS, "collide_aabb_aabb", batch, "axis-aligned boxes")
+
+
+def random_shape(rng, kind: str, spread: float = 1.2) -> dict:
+    if kind == "circle":
+        return rc.random_circle(rng, spread)
+    if kind == "obb":
+        return rc.random_obb(rng, spread)
+    if kind == "aabb":
+        return plain.aabb_from_center(rng.uniform(-spread, spread, 2), rng.uniform(0.2, 1.5, 2))
+    return rc.random_polygon(rng, rng.uniform(-spread, spread, 2), float(rng.uniform(0.3, 1.5)))
+
+
+@pytest.mark.points(2)
+@pytest.mark.partial_credit
+@pytest.mark.visibility("after_due_date")
+def test_random_against_reference(student):
+    """Contacts: many random pairs of every kind, near and far from the origin"""
+    rng = np.random.default_rng(406)
+    offsets = [(0, 0), (-30, -20), (25, 40), (-80, 60)]
+    kinds = {("Circle", "Circle"): [("circle", "circle")],
+             ("Circle", "polygon"): [("circle", "obb"), ("circle", "aabb"), ("circle", "poly")],
+             ("polygon", "polygon"): [("obb", "obb"), ("obb", "poly"), ("poly", "poly"), ("aabb", "obb")]}
+    everything = []
+    for group, pairs_of in kinds.items():
+        module, function = FUNCTIONS[group]
+        pairs = [(cases.translated(random_shape(rng, ka), offset), cases.translated(random_shape(rng, kb), offset))
+                 for ka, kb in pairs_of for offset in offsets for _ in range(40)]
+        if group == ("Circle", "polygon"):
+            pairs += [cases.random_inside_circle(rng, offset=offsets[k % 4]) for k in range(40)]
+            pairs += [cases.random_corner_circle(rng, apart=False, offset=offsets[k % 4]) for k in range(40)]
+        if group == ("polygon", "polygon"):
+            pairs += [cases.random_face_face(rng, offset=offsets[k % 4]) for k in range(60)]
+        batch = [(a, b, want, "random pair") for a, b in pairs
+                 for want in [defined_reference_contact(a, b)] if want is not False]
+        answers = student.call_many(module, function, [(a, b) for a, b, _, _ in batch])
+        everything += [(function, case, got) for case, got in zip(batch, answers)]
+
+    check_cases(everything, lambda item: contact_problem(item[2], item[1][2]), "random pairs of every kind",
+                describe=lambda item: call_text(item[0], item[1][0], item[1][1]),
+                figure_of=lambda item: pair_figure(item[1][0], item[1][1], f"{item[0]}: random pair", item[1][2],
+                                                   item[2]))
+
+
+@pytest.mark.points(1)
+@pytest.mark.visibility("after_due_date")
+def test_degenerate_shapes(student):
+    """Contacts: shapes of zero size (points, segments) and coincident centres"""
+    point = lambda x, y: plain.circle((x, y), 0.0)  # noqa: E731
+    segment = plain.obb((1, 1), (1.5, 0.0), 0.6)
+    groups = {
+        (CIRCLES, "collide_circle_circle"): [(plain.circle((0, 0), 1.0), point(0.5, 0.0)),
+                                             (point(-2, 3), plain.circle((-2, 3.5), 1.0))],
+        (CIRCLE_POLYGON, "collide_circle_polygon"): [
+            (point(0.5, 0.25), plain.aabb((0, 0), (1, 1))), (plain.circle((1, 1.2), 0.3), segment),
+            (plain.circle((1.25, 0.5), 0.5), plain.aabb((0, 0), (1, 1))), (plain.circle((2, 2), 1.5), plain.aabb((0, 0), (1, 1)))],
+        (POLYGONS, "collide_polygon_polygon"): [(segment, plain.obb((1, 1.1), (0.3, 0.3), 0.6)),
+                                                (plain.obb((0, 0), (1, 1), 0.0), plain.obb((0.5, 0.9), (0.0, 0.2), 0.0))],
+    }
+    everything = []
+    for (module, function), pairs in groups.items():
+        answers = student.call_many(module, function, pairs)
+        everything += [(function, a, b, reference_contact(a, b), got) for (a, b), got in zip(pairs, answers)]
+    check_cases(everything, lambda item: contact_problem(item[4], item[3]), "shapes of zero size",
+                describe=lambda item: call_text(item[0], item[1], item[2]),
+                figure_of=lambda item: pair_figure(item[1], item[2], f"{item[0]}: shapes of zero size", item[3],
+                                                   item[4]))

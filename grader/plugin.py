@@ -75,6 +75,21 @@ def register_hypothesis_profile() -> None:
                               phases=[Phase.explicit, Phase.generate, Phase.shrink],
                               suppress_health_check=list(HealthCheck))
     settings.load_profile(HYPOTHESIS_PROFILE)
+    ignore_local_constants()
+
+
+def ignore_local_constants() -> None:
+    """Make Hypothesis draw the same examples whatever modules are loaded.
+
+    Hypothesis 6 mixes into its examples the literal constants of every local module
+    already imported, so a student's public run and the instructor's public + hidden
+    run (which also imports the reference) would draw different examples for one test.
+    Graded runs use its global constants only.
+    """
+    from hypothesis.internal.conjecture import providers
+
+    empty = providers.Constants()
+    providers._get_local_constants = lambda: empty
 
 
 @dataclass

@@ -45,13 +45,15 @@ def partial_points(points: float, fraction: float) -> float:
 
 
 def check_cases(cases: Iterable, problem_of: Callable, label: str, describe: Callable | None = None,
-                figure_of: Callable | None = None) -> int:
+                figure_of: Callable | None = None, smaller: Callable | None = None) -> int:
     """Fail unless ``problem_of(case)`` is None for every case; return the count.
 
     ``problem_of(case)`` returns None for a right answer, else a sentence saying what
     is wrong.  The failure names how many cases were wrong, shows the first one
     (``describe(case)``, default ``repr``) with its problem, draws it
-    (``figure_of(case)``) and carries the share of right cases.
+    (``figure_of(case)``) and carries the share of right cases.  ``smaller()``, when
+    given, returns a small wrong case of the same category (or None) to show instead
+    (:func:`grader.shrink.smallest_failure`).
     """
     cases = list(cases)
     wrong = []
@@ -62,6 +64,11 @@ def check_cases(cases: Iterable, problem_of: Callable, label: str, describe: Cal
     if not wrong:
         return len(cases)
     case, problem = wrong[0]
+    if smaller is not None:  # a small case of the same category, shrunk by Hypothesis
+        found = smaller()
+        if found is not None:
+            case = found
+            problem = problem_of(case) or problem
     shown = describe(case) if describe is not None else repr(case)
     figure = figure_of(case) if figure_of is not None else None
     fail(f"{label}: {len(wrong)} of {len(cases)} cases wrong, e.g. {shown}: {problem}",

@@ -4,14 +4,14 @@ A check describes its failing case as a plain dict (it crosses process boundarie
 goes into results files), and this module turns it into a matplotlib figure.  Two
 kinds exist:
 
-``"shapes"`` (from :func:`grader.checks.geometry.shapes_figure`)
+``"shapes"`` (from :func:`grader.oracles.narrowphase_answers` and the graded tests)
     ``{"kind": "shapes", "title": str, "shapes": [A, B], "expected": contact,
     "got": contact}``.  Shapes and contacts are tagged dicts of :mod:`grader.codec`;
     ``expected`` is absent when the shapes are apart, ``got`` when the student's
     function returned no contact (or something that is not one).  Drawn: both
     outlines labelled A and B, the expected contact points and normal (A to B) in
     green, the returned ones in vermillion, dashed.
-``"pairs"`` (from :func:`grader.checks.grid.pairs_figure`)
+``"pairs"`` (from :func:`grader.oracles.brute_force.pairs_figure`)
     ``{"kind": "pairs", "title": str, "aabbs": [[min_x, min_y, max_x, max_y], ...],
     "cell_size": float, "missed": [[i, j], ...], "extra": [[i, j], ...],
     "bounds": [min_x, min_y, max_x, max_y] or None}``.  Drawn: every box in grey, the

@@ -22,6 +22,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from grader.credit import check_cases, fail
+from grader.shrink import smallest_failure
 from grader.oracles import narrowphase_cases as cases
 from grader.oracles import plain
 from grader.oracles import random_cases as rc
@@ -56,15 +57,29 @@ def touching(triples, note: str = TOUCHING) -> list[tuple]:
     return [(a, b, contact, note) for a, b, contact in triples]
 
 
-def check_contacts(student, module: str, function: str, batch: list[tuple], label: str) -> None:
+def check_contacts(student, module: str, function: str, batch: list[tuple], label: str, strategy=None) -> None:
+    """Every case of ``batch`` against its expected contact; on a failure, a small
+    wrong pair drawn from ``strategy`` (Hypothesis, shrunk) is shown instead."""
     answers = student.call_many(module, function, [(case[0], case[1]) for case in batch])
+
+    def smaller():
+        def wrong_case(pair):
+            found = with_pymunk([pair], "a small case found by Hypothesis")
+            if not found:
+                return None
+            a, b, want, note = found[0]
+            got = student.call(module, function, a, b)
+            return ((a, b, want, note), got) if contact_problem(got, want) is not None else None
+
+        pair = smallest_failure(strategy, lambda pair: wrong_case(pair) is not None)
+        return wrong_case(pair) if pair is not None else None
 
     def problem_of(case):
         (a, b, want, note), got = case
         problem = want(got) if callable(want) else contact_problem(got, want)
         return None if problem is None else f"{problem} [{note}]"
 
-    check_cases(zip(batch, answers), problem_of, label,
+    check_cases(zip(batch, answers), problem_of, label, smaller=smaller if strategy is not None else None,
                 describe=lambda case: call_text(function, case[0][0], case[0][1]),
                 figure_of=lambda case: pair_figure(case[0][0], case[0][1], f"{function}: {case[0][3]}",
                                                    None if callable(case[0][2]) else case[0][2], case[1]))
@@ -121,7 +136,7 @@ def test_circle_circle(student):
                  (plain.circle((0, 0), 1.0), plain.circle((0, 0), 1.0))):
         batch.append((a, b, coincident_centres(a, b), "same centre: the direction is undefined, the normal is not"))
     batch += touching(cases.random_touching_circles(rng) for _ in range(8))
-    check_contacts(student, CIRCLES, "collide_circle_circle", batch, "circle pairs")
+    check_contacts(student, CIRCLES, "collide_circle_circle", batch, "circle pairs", st.tuples(rc.circles, rc.circles))
 
 
 @pytest.mark.points(3)
@@ -152,7 +167,8 @@ def test_circle_polygon(student):
     batch.append((plain.circle((0.1, 0.2), 0.3), plain.obb((0, 0), (1, 1), 0.0), plain.contact((0, -1), 1.1, [(0.1, 0.45)]),
                   "centre inside the box"))
     batch += touching(cases.random_touching_circle_box(rng) for _ in range(8))
-    check_contacts(student, CIRCLE_POLYGON, "collide_circle_polygon", batch, "circles against boxes and polygons")
+    check_contacts(student, CIRCLE_POLYGON, "collide_circle_polygon", batch, "circles against boxes and polygons",
+                   st.tuples(rc.circles, rc.obbs))
 
 
 @pytest.mark.points(4)
@@ -171,7 +187,8 @@ def test_polygon_polygon(student):
     batch += with_pymunk(cases.far_pairs(rng, 10, RIGHT, lambda r: (rc.random_obb(r, 0.8), rc.random_obb(r, 0.8))),
                          "right of the origin")
     batch += touching(cases.random_touching_boxes(rng, kinds=(("obb", "polygon")[k % 2], "obb")) for k in range(10))
-    check_contacts(student, POLYGONS, "collide_polygon_polygon", batch, "boxes and polygons")
+    check_contacts(student, POLYGONS, "collide_polygon_polygon", batch, "boxes and polygons",
+                   st.tuples(rc.obbs, rc.obbs))
 
 
 @pytest.mark.points(1)

@@ -24,6 +24,7 @@ from hypothesis import strategies as st
 
 from grader.compare import number, show
 from grader.credit import check_cases, fail
+from grader.shrink import smallest_failure
 from grader.oracles import narrowphase_cases as cases
 from grader.oracles import plain
 from grader.oracles import random_cases as rc
@@ -56,17 +57,28 @@ def touching(triples) -> list[tuple]:
     return [(a, b, True, TOUCHING) for a, b, _ in triples]
 
 
-def check_yes_no(student, module: str, function: str, batch: list[tuple], label: str) -> None:
+def check_yes_no(student, module: str, function: str, batch: list[tuple], label: str, strategy=None) -> None:
     """Ask ``function`` about every (A, B, expected, note) in one round trip; fail with
-    the share of right answers."""
+    the share of right answers (and a small wrong pair from ``strategy``, shrunk)."""
     answers = student.call_many(module, function, [(a, b) for a, b, _, _ in batch])
+
+    def smaller():
+        def wrong_case(pair):
+            found = with_pymunk([pair], "a small case found by Hypothesis")
+            if not found:
+                return None
+            got = student.call(module, function, *pair)
+            return (found[0], got) if boolean_problem(got, found[0][2]) is not None else None
+
+        pair = smallest_failure(strategy, lambda pair: wrong_case(pair) is not None)
+        return wrong_case(pair) if pair is not None else None
 
     def problem_of(case):
         (a, b, want, note), got = case
         problem = boolean_problem(got, want)
         return None if problem is None else f"{problem} [{note}]"
 
-    check_cases(zip(batch, answers), problem_of, label,
+    check_cases(zip(batch, answers), problem_of, label, smaller=smaller if strategy is not None else None,
                 describe=lambda case: call_text(function, case[0][0], case[0][1]),
                 figure_of=lambda case: pair_figure(case[0][0], case[0][1], f"{function}: {case[0][3]}"))
 
@@ -222,7 +234,7 @@ def test_polygons_overlap_random(student):
     batch += with_pymunk([cases.close_apart_pair(*cases.random_close_apart(rng), gap=float(rng.uniform(-0.05, -0.01)))
                           for _ in range(10)], "polygons just overlapping")
     batch += touching(cases.random_touching_boxes(rng, corner=k % 3 == 0) for k in range(34))
-    check_yes_no(student, POLYGONS, "polygons_overlap", batch, "boxes and polygons")
+    check_yes_no(student, POLYGONS, "polygons_overlap", batch, "boxes and polygons", st.tuples(rc.obbs, rc.obbs))
 
 
 @pytest.mark.points(2)
@@ -245,7 +257,7 @@ def test_obbs_overlap_random(student):
               (plain.obb((-5, 0), (0.5, 0.5), 0.0), plain.obb((-2, 0), (0.5, 0.5), 0.0), False, "boxes left of the origin")]
     batch += touching(cases.random_touching_boxes(rng, corner=k % 3 == 0, kinds=(("obb", "aabb")[k % 2], "obb"))
                       for k in range(20))
-    check_yes_no(student, POLYGONS, "obbs_overlap", batch, "oriented boxes")
+    check_yes_no(student, POLYGONS, "obbs_overlap", batch, "oriented boxes", st.tuples(rc.obbs, rc.obbs))
 
 
 @pytest.mark.points(3)
@@ -266,7 +278,8 @@ def test_circle_polygon_random(student):
     batch += with_pymunk(cases.far_pairs(rng, 10, RIGHT, lambda r: (rc.random_circle(r, 1.2), rc.random_obb(r, 1.2))),
                          "right of the origin")
     batch += touching(cases.random_touching_circle_box(rng) for _ in range(20))
-    check_yes_no(student, CIRCLE_POLYGON, "circle_polygon_overlap", batch, "circles and boxes")
+    check_yes_no(student, CIRCLE_POLYGON, "circle_polygon_overlap", batch, "circles and boxes",
+                 st.tuples(rc.circles, rc.obbs))
 
 
 @pytest.mark.points(1)

@@ -440,3 +440,36 @@ def pairs_quadtree(aabbs, bounds=None, max_bodies_per_node: int = DEFAULT_MAX_BO
     tree = Quadtree.from_aabbs(aabbs, bounds=bounds, max_bodies_per_node=max_bodies_per_node,
                                min_node_area=min_node_area, max_depth=max_depth)
     return tree.pairs()
+
+
+def tree_structure(aabbs, bounds=None, max_bodies_per_node: int = DEFAULT_MAX_BODIES_PER_NODE,
+                   min_node_area: float = DEFAULT_MIN_NODE_AREA, max_depth: int = DEFAULT_MAX_DEPTH) -> dict:
+    """The tree :func:`pairs_quadtree` builds, as plain data (for checks and pictures).
+
+    Returns
+    -------
+    dict
+        ``{"root_bounds": [4 floats], "nodes": [...]}``, nodes in depth-first order
+        from the root, each ``{"depth": int, "bounds": [4 floats], "bodies": [ints],
+        "children": [indices into nodes]}``.
+
+    Examples
+    --------
+    >>> shape = tree_structure([[0, 0, 1, 1], [3, 3, 4, 4]], max_bodies_per_node=1)
+    >>> [(node["depth"], node["bodies"], len(node["children"])) for node in shape["nodes"]]
+    [(0, [], 4), (1, [0], 0), (1, [], 0), (1, [], 0), (1, [1], 0)]
+    """
+    tree = Quadtree.from_aabbs(aabbs, bounds=bounds, max_bodies_per_node=max_bodies_per_node,
+                               min_node_area=min_node_area, max_depth=max_depth)
+    nodes: list[dict] = []
+
+    def visit(node: QuadtreeNode) -> int:
+        number = len(nodes)
+        entry = {"depth": int(node.depth), "bounds": [float(v) for v in node.bounds],
+                 "bodies": [int(i) for i in node.bodies], "children": []}
+        nodes.append(entry)
+        entry["children"] = [visit(child) for child in node.children]
+        return number
+
+    visit(tree.root)
+    return {"root_bounds": [float(v) for v in tree.root.bounds], "nodes": nodes}

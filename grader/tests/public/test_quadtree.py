@@ -319,3 +319,48 @@ def test_outside_bounds(student, scene):
 @given(scene=on_split_lines(offset=-16.0))
 def test_negative_coordinates(student, scene):
     check_scene(student, *scene, "boxes at negative coordinates meeting on a splitting line of (-16, -16, 0, 0)")
+
+
+# The tree itself -----------------------------------------------------------------------------
+STRUCTURE = "tree_structure"
+
+
+def structure_cases(seed: int) -> list[tuple]:
+    """(boxes, bounds, max_bodies_per_node, min_node_area, max_depth, note) scenes."""
+    rng = np.random.default_rng(seed)
+    # Small scenes first: the first broken one is the one shown.
+    out = [(np.array([[0, 0, 1, 1], [1, 0, 2, 1], [0, 1, 1, 2], [1, 1, 2, 2], [0.2, 0.2, 0.4, 0.4]], dtype=float),
+            [0.0, 0.0, 2.0, 2.0], 1, 0.0, 16, "boxes on the root's splitting lines stay at the root"),
+           (np.array([[0.3, 0.3, 0.3, 0.3]] * 6 + [[0.0, 0.0, 4.0, 4.0]]), None, 2, 0.0, 5,
+            "many bodies at one point: the depth rule stops splitting"),
+           (random_aabbs(rng, 12, world=8.0, size=0.5), [-4.0, -4.0, 4.0, 4.0], 2, 0.0, 16,
+            "given bounds, small boxes"),
+           (random_aabbs(rng, 30, world=16.0), [-4.0, -4.0, 4.0, 4.0], 2, 0.0, 16,
+            "given bounds, some boxes outside the root"),
+           (random_aabbs(rng, 50, world=4.0, size=0.3), None, 1, 0.05, 16,
+            "one body per leaf, the area rule stops splitting"),
+           (random_aabbs(rng, 60, world=20.0), None, 4, 0.0, 16, "random boxes"),
+           (clustered_aabbs(rng, 80), None, 3, 0.0, 16, "clustered boxes")]
+    return out
+
+
+def structure_call(boxes, bounds, max_bodies, min_area, max_depth) -> str:
+    where = "None" if bounds is None else show([float(b) for b in bounds])
+    return (f"{STRUCTURE}(aabbs={describe_boxes(boxes)}, bounds={where}, max_bodies_per_node={max_bodies}, "
+            f"min_node_area={min_area:g}, max_depth={max_depth})")
+
+
+@pytest.mark.points(2)
+def test_structure(student):
+    """Quadtree: the tree your insert and split build keeps every invariant"""
+    from grader.oracles.quadtree_shape import structure_problem
+
+    cases = structure_cases(221)
+    answers = student.call_many(MODULE, STRUCTURE, [(boxes, bounds, m, a, d) for boxes, bounds, m, a, d, _ in cases])
+    for (boxes, bounds, max_bodies, min_area, max_depth, note), answer in zip(cases, answers):
+        problem = structure_problem(answer, boxes, max_bodies, min_area, max_depth, bounds)
+        if problem is not None:
+            fail(f"{structure_call(boxes, bounds, max_bodies, min_area, max_depth)} [{note}]: {problem}. "
+                 f"(tree_structure reads the tree built by your Quadtree.insert, child_holding and split.)",
+                 figure=pairs_figure(boxes, set(), set(), f"{STRUCTURE}: {note}",
+                                     bounds=figure_bounds(boxes, bounds)))

@@ -67,11 +67,13 @@ HYPOTHESIS_PROFILE = "grading"
 
 def register_hypothesis_profile() -> None:
     """Reproducible, bounded Hypothesis runs: no database, no deadline, no 'explain'
-    phase (it re-runs the student's code many times), one bug reported."""
+    phase (it re-runs the student's code many times), one bug reported, 30 examples
+    per test unless the test asks for another number (each is a round trip to the
+    sandbox, and grading 100 submissions must stay within minutes)."""
     from hypothesis import HealthCheck, Phase, settings
 
     settings.register_profile(HYPOTHESIS_PROFILE, database=None, derandomize=True, deadline=None,
-                              max_examples=60, report_multiple_bugs=False, print_blob=False,
+                              max_examples=30, report_multiple_bugs=False, print_blob=False,
                               phases=[Phase.explicit, Phase.generate, Phase.shrink],
                               suppress_health_check=list(HealthCheck))
     settings.load_profile(HYPOTHESIS_PROFILE)

@@ -8,6 +8,8 @@ of touching.  Every returned field is compared
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 import pytest
 
@@ -106,17 +108,16 @@ def random_shape(rng, kind: str, spread: float = 1.2) -> dict:
     return rc.random_polygon(rng, rng.uniform(-spread, spread, 2), float(rng.uniform(0.3, 1.5)))
 
 
-@pytest.mark.points(2)
-@pytest.mark.partial_credit
-@pytest.mark.visibility("after_due_date")
-def test_random_against_reference(student):
-    """Contacts: many random pairs of every kind, near and far from the origin"""
+@lru_cache(maxsize=1)
+def random_batches() -> dict:
+    """(module, function) -> [(A, B, expected contact, note)]: the same for every
+    submission, so built (with the reference's answers) once per grading process."""
     rng = np.random.default_rng(406)
     offsets = [(0, 0), (-30, -20), (25, 40), (-80, 60)]
     kinds = {("Circle", "Circle"): [("circle", "circle")],
              ("Circle", "polygon"): [("circle", "obb"), ("circle", "aabb"), ("circle", "poly")],
              ("polygon", "polygon"): [("obb", "obb"), ("obb", "poly"), ("poly", "poly"), ("aabb", "obb")]}
-    everything = []
+    out = {}
     for group, pairs_of in kinds.items():
         module, function = FUNCTIONS[group]
         pairs = [(cases.translated(random_shape(rng, ka), offset), cases.translated(random_shape(rng, kb), offset))
@@ -126,8 +127,18 @@ def test_random_against_reference(student):
             pairs += [cases.random_corner_circle(rng, apart=False, offset=offsets[k % 4]) for k in range(40)]
         if group == ("polygon", "polygon"):
             pairs += [cases.random_face_face(rng, offset=offsets[k % 4]) for k in range(60)]
-        batch = [(a, b, want, "random pair") for a, b in pairs
-                 for want in [defined_reference_contact(a, b)] if want is not False]
+        out[(module, function)] = [(a, b, want, "random pair") for a, b in pairs
+                                   for want in [defined_reference_contact(a, b)] if want is not False]
+    return out
+
+
+@pytest.mark.points(2)
+@pytest.mark.partial_credit
+@pytest.mark.visibility("after_due_date")
+def test_random_against_reference(student):
+    """Contacts: many random pairs of every kind, near and far from the origin"""
+    everything = []
+    for (module, function), batch in random_batches().items():
         answers = student.call_many(module, function, [(a, b) for a, b, _, _ in batch])
         everything += [(function, case, got) for case, got in zip(batch, answers)]
 

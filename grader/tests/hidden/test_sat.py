@@ -7,6 +7,8 @@ finds within 1e-7 m of touching are left out of random batches (rounding decides
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 import pytest
 
@@ -118,11 +120,10 @@ def kind_pairs(rng, kind: str, count: int, offset) -> list[tuple]:
     return [(cases.translated(shape(a_kind), offset), cases.translated(shape(b_kind), offset)) for _ in range(count)]
 
 
-@pytest.mark.points(2)
-@pytest.mark.partial_credit
-@pytest.mark.visibility("after_due_date")
-def test_random_against_reference(student):
-    """SAT: many random pairs of every kind, near and far from the origin"""
+@lru_cache(maxsize=1)
+def random_batches() -> dict:
+    """(module, function) -> [(A, B, expected, note)]: the same for every submission,
+    so built (with the reference's answers) once per grading process."""
     rng = np.random.default_rng(313)
     offsets = [(0, 0), (-40, -25), (35, 50), (-100, 100)]
     batches = {
@@ -132,7 +133,7 @@ def test_random_against_reference(student):
         (CIRCLE_POLYGON, "circle_polygon_overlap"): ["circle-obb", "circle-poly", "circle-aabb"],
         (CIRCLES, "circles_overlap"): ["circle-circle"],
     }
-    everything = []
+    out = {}
     for (module, function), kinds in batches.items():
         pairs = [p for kind in kinds for offset in offsets for p in kind_pairs(rng, kind, 40, offset)]
         if function in ("obbs_overlap", "polygons_overlap"):
@@ -142,7 +143,17 @@ def test_random_against_reference(student):
             pairs += [cases.random_close_apart(rng, offset=offsets[k % 4]) for k in range(60)]
         if function == "circle_polygon_overlap":
             pairs += [cases.random_corner_circle(rng, apart=k % 2 == 0, offset=offsets[k % 4]) for k in range(60)]
-        batch = batch_of(pairs, "random pair")
+        out[(module, function)] = batch_of(pairs, "random pair")
+    return out
+
+
+@pytest.mark.points(2)
+@pytest.mark.partial_credit
+@pytest.mark.visibility("after_due_date")
+def test_random_against_reference(student):
+    """SAT: many random pairs of every kind, near and far from the origin"""
+    everything = []
+    for (module, function), batch in random_batches().items():
         answers = student.call_many(module, function, [(a, b) for a, b, _, _ in batch])
         everything += [(function, case, got) for case, got in zip(batch, answers)]
 

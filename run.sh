@@ -46,8 +46,13 @@ setup() {
     fi
     local stamp="$VENV/.installed-$(sha1sum pyproject.toml | cut -c1-12)"
     if [ ! -f "$stamp" ]; then
-        "$PY" -m pip install --quiet --upgrade pip
-        "$PY" -m pip install --quiet -e ".[dev,book]"
+        # pip's and setuptools' chatter goes to a log, shown only when the install fails.
+        if ! { "$PY" -m pip install --quiet --upgrade pip &&
+               "$PY" -m pip install --quiet -e ".[dev,book]"; } >"$VENV/pip.log" 2>&1; then
+            cat "$VENV/pip.log" >&2
+            echo "setup: installing the pinned packages failed (log above, also in $VENV/pip.log)" >&2
+            exit 1
+        fi
         rm -f "$VENV"/.installed-*
         touch "$stamp"
     fi

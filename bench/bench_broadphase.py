@@ -420,7 +420,7 @@ def report(rows: list[dict]) -> str:
             lines.append(f"{n:>7}  {scene:<9}  " + " ".join(cells))
     lines += ["", "Goals:"]
     for goal, scene, ratio, met in goals(rows):
-        verdict = "not measured" if met is None else ("MET" if met else "NOT MET")
+        verdict = "not measured" if met is None else ("met" if met else "short of it (a figure, not an error)")
         measured = "-" if ratio is None else f"{ratio:.1f}x"
         lines.append(f"  {goal:<62} {scene:<9} {measured:>7}  {verdict}")
     mismatched = [r for r in rows if r["pairs_match"] is False]

@@ -380,6 +380,10 @@ class _PlainProgress:
 
 
 def _progress_bar(total: int, initial: int, enabled: bool):
+    """A tqdm bar on a terminal; whole lines (one per submission) anywhere else, so a
+    log or CI output holds no carriage returns."""
+    if not (hasattr(sys.stderr, "isatty") and sys.stderr.isatty()):
+        return _PlainProgress(total, initial, not enabled)
     try:
         from tqdm import tqdm
     except ImportError:

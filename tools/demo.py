@@ -12,6 +12,7 @@ soft step for the hard scenes) and pymunk still runs ``--iterations``.
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import time
 
@@ -73,6 +74,13 @@ def format_rows(rows: list[dict]) -> str:
     return "\n".join("  ".join(cell.rjust(w) for cell, w in zip(row, widths)) for row in cells)
 
 
+def plain_text(text: str) -> str:
+    """A docstring line without its reStructuredText markup (``code``, :role:`x`, *x*)."""
+    text = re.sub(r":[a-z]+:`~?([^`]+)`", r"\1", text)
+    text = re.sub(r"`+([^`]+)`+", r"\1", text)
+    return re.sub(r"\*{1,2}(\S(?:[^*]*\S)?)\*{1,2}", r"\1", text)  # *emphasis*, not "0.8 * 0.8"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description="Simulate a named scene and summarise it.")
     parser.add_argument("scene", nargs="?", default="stack_10", help="scene name (see --list)")
@@ -84,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.list:
         for name, scene in sorted(SCENES.items()):
-            print(f"{name:16s} {scene.description.strip().splitlines()[0]}")
+            print(f"{name:16s} {plain_text(scene.description.strip().splitlines()[0])}")
         return 0
     try:
         scene = get_scene(args.scene)
@@ -92,7 +100,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     seconds = args.seconds if args.seconds is not None else scene.duration
-    print(f"scene {scene.name}: {scene.description.strip().splitlines()[0]}")
+    print(f"scene {scene.name}: {plain_text(scene.description.strip().splitlines()[0])}")
     if args.recommended:
         settings = scene.recommended_settings()
         step = (f"soft step, {settings.substeps} sub-steps x {settings.solver.iterations} sweeps"

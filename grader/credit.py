@@ -45,7 +45,8 @@ def partial_points(points: float, fraction: float) -> float:
 
 
 def check_cases(cases: Iterable, problem_of: Callable, label: str, describe: Callable | None = None,
-                figure_of: Callable | None = None, smaller: Callable | None = None) -> int:
+                figure_of: Callable | None = None, smaller: Callable | None = None,
+                category: Callable | None = None) -> int:
     """Fail unless ``problem_of(case)`` is None for every case; return the count.
 
     ``problem_of(case)`` returns None for a right answer, else a sentence saying what
@@ -53,7 +54,9 @@ def check_cases(cases: Iterable, problem_of: Callable, label: str, describe: Cal
     (``describe(case)``, default ``repr``) with its problem, draws it
     (``figure_of(case)``) and carries the share of right cases.  ``smaller()``, when
     given, returns a small wrong case of the same category (or None) to show instead
-    (:func:`grader.shrink.smallest_failure`).
+    (:func:`grader.shrink.smallest_failure`).  ``category(case)``, when given, names
+    each case's category (a kind of input, a function): the share carried is then the
+    worst category's, so a bug that breaks one whole category earns no partial credit.
     """
     cases = list(cases)
     wrong = []
@@ -63,6 +66,17 @@ def check_cases(cases: Iterable, problem_of: Callable, label: str, describe: Cal
             wrong.append((case, problem))
     if not wrong:
         return len(cases)
+    fraction = 1 - len(wrong) / len(cases)
+    if category is not None:  # the share of the worst category: one systematic bug costs it all
+        totals: dict = {}
+        for case in cases:
+            key = category(case)
+            totals[key] = totals.get(key, 0) + 1
+        misses: dict = {}
+        for case, _ in wrong:
+            key = category(case)
+            misses[key] = misses.get(key, 0) + 1
+        fraction = min(1 - misses.get(key, 0) / total for key, total in totals.items())
     case, problem = wrong[0]
     if smaller is not None:  # a small case of the same category, shrunk by Hypothesis
         found = smaller()
@@ -72,4 +86,4 @@ def check_cases(cases: Iterable, problem_of: Callable, label: str, describe: Cal
     shown = describe(case) if describe is not None else repr(case)
     figure = figure_of(case) if figure_of is not None else None
     fail(f"{label}: {len(wrong)} of {len(cases)} cases wrong, e.g. {shown}: {problem}",
-         fraction=1 - len(wrong) / len(cases), figure=figure)
+         fraction=fraction, figure=figure)

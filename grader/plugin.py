@@ -78,6 +78,7 @@ def register_hypothesis_profile() -> None:
                               suppress_health_check=list(HealthCheck))
     settings.load_profile(HYPOTHESIS_PROFILE)
     ignore_local_constants()
+    bound_shrinking()
 
 
 def ignore_local_constants() -> None:
@@ -92,6 +93,19 @@ def ignore_local_constants() -> None:
 
     empty = providers.Constants()
     providers._get_local_constants = lambda: empty
+
+
+def bound_shrinking() -> None:
+    """At most 200 successful shrinks and 3 s of shrinking per failing test.
+
+    Whether a test fails is settled by the examples it generates; shrinking only makes
+    the failing example shown smaller.  Hypothesis allows 500 shrinks and five minutes,
+    which made one failing test of a buggy submission cost seconds of grading each.
+    """
+    from hypothesis.internal.conjecture import engine
+
+    engine.MAX_SHRINKS = 200
+    engine.MAX_SHRINKING_SECONDS = 3
 
 
 @dataclass
@@ -295,7 +309,12 @@ def outcome_of(excinfo, item) -> Outcome:
         message = str(exc) + (f"\n{notes}" if notes else "")
         return Outcome("failed", exc.fraction, capped(message, MESSAGE_LIMIT), bounded(exc.figure), metrics)
     if isinstance(exc, AssertionError):
-        message = str(exc) + (f"\n{notes}" if notes else "")
+        # A test's own message stands alone: pytest's "assert ..." rewrite after it
+        # repeats the test's internals, not the student's case.
+        text = str(exc)
+        if not text.startswith("assert ") and "\nassert " in text:
+            text = text.split("\nassert ", 1)[0]
+        message = text + (f"\n{notes}" if notes else "")
         return Outcome("failed", 0.0, capped(message, MESSAGE_LIMIT), None, metrics)
     if isinstance(exc, pytest.skip.Exception):
         return Outcome("error", 0.0, f"this test could not run here: {exc}", metrics=metrics)

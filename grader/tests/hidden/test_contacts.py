@@ -68,7 +68,7 @@ def check_contacts(student, module: str, function: str, batch: list[tuple], labe
         problem = contact_problem(got, want)
         return None if problem is None else f"{problem} [{note}]"
 
-    check_cases(zip(batch, answers), problem_of, label,
+    check_cases(zip(batch, answers), problem_of, label, category=lambda case: case[0][3],
                 describe=lambda case: call_text(function, case[0][0], case[0][1]),
                 figure_of=lambda case: pair_figure(case[0][0], case[0][1], f"{function}: {case[0][3]}",
                                                    case[0][2], case[1]))
@@ -143,6 +143,7 @@ def test_random_against_reference(student):
         everything += [(function, case, got) for case, got in zip(batch, answers)]
 
     check_cases(everything, lambda item: contact_problem(item[2], item[1][2]), "random pairs of every kind",
+                category=lambda item: item[0],
                 describe=lambda item: call_text(item[0], item[1][0], item[1][1]),
                 figure_of=lambda item: pair_figure(item[1][0], item[1][1], f"{item[0]}: random pair", item[1][2],
                                                    item[2]))

@@ -133,6 +133,19 @@ def conservation_problem(case, result) -> str | None:
         if problem:
             return (f"{problem}: momentum must be conserved; apply ONE impulse per point, +P to B and -P to A "
                     "(erratum 22: computing a separate impulse for each body breaks this)")
+    # Every case approaches: the response must push (a resolver that does nothing keeps
+    # momentum and energy, and fails here); without friction, which turns the bodies
+    # after the normal impulse, no contact point may still close in afterwards.
+    if not np.any(jn > 0):
+        return (f"the bodies approach at the contact, but the normal impulses are {show(jn.tolist())}: a "
+                "contact that closes in must be pushed apart (j > 0)")
+    if a.friction * b.friction == 0.0:
+        for point in contact.points:
+            closing = float((b2.velocity_at(point) - a2.velocity_at(point)) @ n)
+            if closing < -1e-9:
+                return (f"after the call the bodies still approach at the contact point {show(list(point))}: "
+                        f"relative normal velocity {closing:.6g} m/s < 0 (no friction here); the impulses must "
+                        f"stop the approach (returned j = {show(jn.tolist())})")
     if count == 1:
         energy_before = a.kinetic_energy() + b.kinetic_energy()
         energy_after = a2.kinetic_energy() + b2.kinetic_energy()
@@ -227,17 +240,55 @@ def rms_distance(frame: np.ndarray, other: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.sum((frame[:, :2] - other[:, :2]) ** 2, -1))))
 
 
+#: Balls of the scene: the shape of every step of the trajectory is (BALLS, 4).
+BALLS = len(scene_driver.initial_balls()[0])
+
+
+def trajectory_shape_problem(frames, steps: int) -> str | None:
+    """None when ``frames`` (plain data from the sandbox) is ``steps`` lists of BALLS
+    lists of 4 values; else what it is instead.  Only lengths are read, so the answer
+    of a driver the student's code replaced costs nothing however large it is."""
+    if not isinstance(frames, list):
+        return f"a {type(frames).__name__}, not a list of steps"
+    if len(frames) != steps:
+        return f"{len(frames)} steps"
+    for k, frame in enumerate(frames):
+        if not isinstance(frame, list) or len(frame) != BALLS:
+            size = f"{len(frame)} balls" if isinstance(frame, list) else f"a {type(frame).__name__}"
+            return f"{size} at step {k}"
+        if any(not isinstance(ball, list) or len(ball) != 4 for ball in frame):
+            return f"a ball that is not (x, y, vx, vy) at step {k}"
+    return None
+
+
+def brief(data) -> str:
+    """A short description of an answer of any size (``show`` writes a whole dict or text)."""
+    if isinstance(data, dict):
+        return f"a dict with keys {sorted(map(str, data))[:8]}"
+    if isinstance(data, str):
+        return repr(data[:100]) + ("..." if len(data) > 100 else "")
+    return show(data)[:300]
+
+
 def run_driver(code, who: str) -> tuple[np.ndarray, float, float]:
     """(trajectory, radius, seconds) of the scene in ``code``'s sandbox; the first,
-    untimed call pays for imports and first calls."""
+    untimed call pays for imports and first calls.  The trajectory's shape is checked
+    before anything else reads it (the student's code runs in that sandbox, and may
+    have replaced the driver)."""
     code.value_of(code.sandbox.call("scene_driver", "drop_balls", [2], timeout=60.0), f"the ball scene with {who}")
     result = code.sandbox.call("scene_driver", "drop_balls", [STEPS], timeout=60.0)
     data = code.value_of(result, f"the ball scene with {who}")
+    if not isinstance(data, dict) or "trajectory" not in data:
+        fail(f"the ball scene with {who} returned no trajectory: {brief(data)}")
+    problem = trajectory_shape_problem(data["trajectory"], STEPS)
+    if problem is not None:
+        fail(f"the ball scene with {who} returned a trajectory of the wrong shape: {STEPS} steps of {BALLS} balls "
+             f"(x, y, vx, vy) were asked for, it has {problem}")
     try:
         trajectory = np.array(data["trajectory"], dtype=float)
         radius = float(data["radius"])
     except (KeyError, TypeError, ValueError):
-        fail(f"the ball scene with {who} returned no trajectory: {show(data)}")
+        fail(f"the ball scene with {who} returned no trajectory and radius: {brief(data)}")
     return trajectory, radius, result.elapsed
 
 

@@ -51,7 +51,7 @@ def check_yes_no(student, module: str, function: str, batch: list[tuple], label:
         problem = boolean_problem(got, want)
         return None if problem is None else f"{problem} [{note}]"
 
-    check_cases(zip(batch, answers), problem_of, label,
+    check_cases(zip(batch, answers), problem_of, label, category=lambda case: case[0][3],
                 describe=lambda case: call_text(function, case[0][0], case[0][1]),
                 figure_of=lambda case: pair_figure(case[0][0], case[0][1], f"{function}: {case[0][3]}"))
 
@@ -161,7 +161,7 @@ def test_random_against_reference(student):
         function, (a, b, want, note), got = item
         return boolean_problem(got, want)
 
-    check_cases(everything, problem_of, "random pairs of every kind",
+    check_cases(everything, problem_of, "random pairs of every kind", category=lambda item: item[0],
                 describe=lambda item: call_text(item[0], item[1][0], item[1][1]),
                 figure_of=lambda item: pair_figure(item[1][0], item[1][1], f"{item[0]}: random pair"))
 

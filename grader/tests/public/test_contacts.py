@@ -80,6 +80,7 @@ def check_contacts(student, module: str, function: str, batch: list[tuple], labe
         return None if problem is None else f"{problem} [{note}]"
 
     check_cases(zip(batch, answers), problem_of, label, smaller=smaller if strategy is not None else None,
+                category=lambda case: case[0][3],
                 describe=lambda case: call_text(function, case[0][0], case[0][1]),
                 figure_of=lambda case: pair_figure(case[0][0], case[0][1], f"{function}: {case[0][3]}",
                                                    None if callable(case[0][2]) else case[0][2], case[1]))

@@ -1,6 +1,7 @@
 """1D momentum: the three formulas against sympy closed forms derived here."""
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 
 import numpy as np
@@ -75,3 +76,70 @@ def test_perfectly_inelastic(student):
     check_cases(zip(cases, answers),
                 lambda ca: number("common velocity", ca[1], common(*ca[0]), rtol=1e-9, atol=1e-9),
                 "perfectly inelastic collisions", describe=lambda ca: f"perfectly_inelastic_1d{show(ca[0])}")
+
+
+@lru_cache(maxsize=None)
+def wall_forms():
+    """(v1', v2') and the common velocity with inverse masses w = 1/m, from the same
+    sympy solution: w = 0 is an immovable wall (m = inf), where the forms in m give nan."""
+    w1, w2, v1, v2, e = sp.symbols("w1 w2 v1 v2 e", real=True)
+    m1, m2, u1, u2 = sp.symbols("m1 m2 u1 u2", real=True)
+    solution = sp.solve([sp.Eq(m1 * v1 + m2 * v2, m1 * u1 + m2 * u2), sp.Eq(u2 - u1, -e * (v2 - v1))], [u1, u2],
+                        dict=True)[0]
+    inverse = {m1: 1 / w1, m2: 1 / w2}
+    after = tuple(sp.simplify(solution[u].subs(inverse)) for u in (u1, u2))
+    general = sp.lambdify((w1, v1, w2, v2, e), after, "math")
+    common = sp.lambdify((w1, v1, w2, v2), sp.simplify(after[0].subs(e, 0)), "math")
+    return general, common
+
+
+def inverse(mass: float) -> float:
+    return 0.0 if math.isinf(mass) else 1.0 / mass
+
+
+WALL_CASES = [(0.2, 3.0, math.inf, 0.0, 0.5),     # the docstring's ball against a wall: (-1.5, 0)
+              (math.inf, -2.0, 1.5, 4.0, 1.0),     # the wall is body 1, moving at -2 m/s
+              (2.0, -1.0, math.inf, 1.0, 0.0),     # a wall moving at 1 m/s catches the body: both at 1
+              (0.5, 5.0, math.inf, -3.0, 0.8)]
+
+
+@pytest.mark.points(1)
+def test_wall(student):
+    """1D collisions with an immovable wall (infinite mass)"""
+    general, common = wall_forms()
+    answers = student.call_many(MODULE, "collision_1d", WALL_CASES)
+    check_cases(zip(WALL_CASES, answers),
+                lambda ca: velocities_problem(ca[1], general(inverse(ca[0][0]), ca[0][1], inverse(ca[0][2]), ca[0][3],
+                                                             ca[0][4])),
+                "collisions with a wall", describe=lambda ca: f"collision_1d{show(ca[0])}")
+    cases = [case[:4] for case in WALL_CASES]
+    answers = student.call_many(MODULE, "perfectly_inelastic_1d", cases)
+    check_cases(zip(cases, answers),
+                lambda ca: number("common velocity", ca[1], common(inverse(ca[0][0]), ca[0][1], inverse(ca[0][2]),
+                                                                   ca[0][3]), rtol=1e-9, atol=1e-9),
+                "sticking to a wall", describe=lambda ca: f"perfectly_inelastic_1d{show(ca[0])}")
+
+
+BAD_INPUTS = [("collision_1d", (0.0, 1.0, 1.0, 0.0, 0.5), "a mass of 0"),
+              ("collision_1d", (-1.0, 1.0, 1.0, 0.0, 0.5), "a negative mass"),
+              ("collision_1d", (math.nan, 1.0, 1.0, 0.0, 0.5), "a NaN mass"),
+              ("collision_1d", (math.inf, 1.0, math.inf, 0.0, 0.5), "two infinite masses"),
+              ("collision_1d", (1.0, math.nan, 1.0, 0.0, 0.5), "a NaN velocity"),
+              ("collision_1d", (1.0, math.inf, 1.0, 0.0, 0.5), "an infinite velocity"),
+              ("collision_1d", (1.0, 1.0, 1.0, 0.0, 1.5), "e > 1"),
+              ("collision_1d", (1.0, 1.0, 1.0, 0.0, -0.1), "e < 0"),
+              ("elastic_collision_1d", (1.0, 1.0, 0.0, 0.0), "a mass of 0"),
+              ("perfectly_inelastic_1d", (math.inf, 1.0, math.inf, 0.0), "two infinite masses"),
+              ("perfectly_inelastic_1d", (1.0, 1.0, 2.0, math.nan), "a NaN velocity")]
+
+
+@pytest.mark.points(1)
+def test_rejects_bad_input(student):
+    """Bad masses, velocities and restitution raise ValueError (as the docstrings say)"""
+    for function, args, what in BAD_INPUTS:
+        result = student.raw(MODULE, function, *args)
+        if result.status in ("not_implemented", "timeout", "crashed"):
+            student.value_of(result, f"{MODULE}.{function}")  # stops the test with that status
+        assert result.status == "error" and "ValueError" in result.message, (
+            f"{function}{show(args)} ({what}) must raise ValueError, "
+            + (f"got {show(result.value)}" if result.ok else f"raised: {result.message.strip()[-300:]}"))

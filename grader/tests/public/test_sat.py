@@ -79,6 +79,7 @@ def check_yes_no(student, module: str, function: str, batch: list[tuple], label:
         return None if problem is None else f"{problem} [{note}]"
 
     check_cases(zip(batch, answers), problem_of, label, smaller=smaller if strategy is not None else None,
+                category=lambda case: case[0][3],
                 describe=lambda case: call_text(function, case[0][0], case[0][1]),
                 figure_of=lambda case: pair_figure(case[0][0], case[0][1], f"{function}: {case[0][3]}"))
 

@@ -36,7 +36,9 @@ the submission's fingerprint and the hash of the test spec.  A rerun of the same
 command skips every submission whose results record the same two (``--regrade``
 grades them again), so a batch killed at any point loses only the submissions that
 were being graded.  A submission that cannot be graded (a damaged or unsafe archive,
-no ``exercises`` package) gets a results.json with 0 points saying why; a failure of
+a symbolic link anywhere in it, a folder over the size caps, no ``exercises`` package)
+gets a results.json with 0 points saying why -- links and sizes are checked before any
+of its files is read, even to fingerprint it (:mod:`grader.submissions`); a failure of
 the grader itself writes nothing, is reported, and is retried by the next run.
 Changing the checks' code does not change the spec hash: pass ``--regrade`` then.
 
@@ -566,12 +568,16 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                 todo: list[Job] = []
                 for submission in submissions:
                     results_path = out_dir / submission.id / RESULTS_NAME
+                    refusal = None
                     try:
+                        # Checks links and sizes before reading a byte (grader.submissions).
                         submission_fingerprint = fingerprint(submission.path)
-                        readable = True
+                    except SubmissionRefused as exc:
+                        refusal = str(exc)
+                        submission_fingerprint = "refused:" + hashlib.sha256(refusal.encode()).hexdigest()
                     except OSError as exc:
+                        refusal = "the submission could not be read"
                         submission_fingerprint = f"unreadable:{exc.errno}"
-                        readable = False
                     previous = read_results(results_path)
                     meta = (previous or {}).get("extra_data") or {}
                     if (not regrade and previous is not None and meta.get("fingerprint") == submission_fingerprint
@@ -582,11 +588,12 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                         write_feedback(results_path, submission.id, feedback, warn)
                         bar.update(1)
                         continue
-                    if not readable:
-                        data = refused_results(tests, "the submission could not be read", 0.0, submission.id,
-                                               submission_fingerprint, digest)
+                    if refusal is not None:
+                        data = refused_results(tests, refusal, 0.0, submission.id, submission_fingerprint, digest)
                         write_results(data, results_path)
                         log_graded(out_dir, submission.id, "refused", data)
+                        if html:
+                            write_student_report(results_path, warn)
                         write_feedback(results_path, submission.id, feedback, warn)
                         rows[submission.id] = _row(submission, "refused", data, out_dir, data["output"])
                         bar.update(1)

@@ -13,7 +13,10 @@
   exactly as ``grader grade`` does and writes ``$AUTOGRADER_ROOT/results/results.json``
   (a zip written by ``grader submit``, or its files as Gradescope unpacks an uploaded
   zip, is checked against its ``MANIFEST.json`` first, see :mod:`grader.submissions`;
-  an upload without one is graded as it is);
+  an upload without one is graded as it is).  The grader reads the upload as root
+  before any sandbox exists, so an upload holding a symbolic link anywhere (say
+  ``exercises -> /autograder/source/solutions``), or over the caps on files and bytes,
+  is refused with a reason before any of its files is read;
 - ``grader/`` (with the whole test spec, hidden tests included), ``solutions/`` (the
   reference engine the checks compare with; the sandbox never mounts it),
   ``pyproject.toml`` and ``requirements.txt`` (pins taken from ``pyproject.toml``).

@@ -12,7 +12,14 @@ like the samples of :mod:`grader.example_class`:
   ``__init__.py``, lying return values): it must earn nothing;
 - as an **archive** (a zip with ``..`` or absolute paths, a symbolic link, a zip bomb,
   a member name that is not UTF-8): refused with a reason, or graded normally when the
-  archive is merely unusual.
+  archive is merely unusual;
+- as a **folder** the grader must not follow or read whole (a symbolic link to the
+  reference or to another student's work, the submission's own path a link, a sparse
+  2 GiB file, too many files): refused with a reason, before any file is read.
+
+The cases of ``SIZES`` make the grader's own process read something enormous (a
+contact of 20,000 points, a 40 MB message, a scene of 8,000 balls): each costs only the
+tests it touches, quickly, with the grader's memory bounded.
 
 ``expect`` lists, per group of tests, the outcome statuses accepted and the words the
 test's output must contain; every test of a reference-based case outside those groups
@@ -22,8 +29,9 @@ must pass, every test of a stubs-based case outside them must read "not implemen
 
 Code may name paths through placeholders filled in when the case is built:
 ``@@REPO@@`` (this repository: the solutions and hidden tests a student would look
-for), ``@@OUT@@`` (the grader's output folder) and ``@@SENTINEL@@`` (a folder the
-hostile code tries to write into, which must stay unchanged).
+for), ``@@OUT@@`` (the grader's output folder), ``@@SENTINEL@@`` (a folder the
+hostile code tries to write into, which must stay unchanged) and ``@@KEY@@`` (the
+description of the kernel key one case stores and a later one looks for).
 
     python -m grader.hostile_cases --out DIR [--grading-out OUT] [--sentinel FOLDER]
 
@@ -46,22 +54,44 @@ from .example_class import (EXERCISES_DIR, PACKAGE, REPO_ROOT, SOLUTIONS_DIR, Re
 
 MOMENTUM = "response.momentum_1d"
 PROJECTION = "narrowphase.projection"
+CIRCLE_MODULE = "narrowphase.circle_circle"
 SIGNATURE = "def perfectly_inelastic_1d(m1, v1, m2, v2):"
+# The test sets below were derived by grading each case on the whole spec (public and
+# hidden tests, `grader list`) and reading which graded tests call the function a case
+# replaces (grader/tests/*/test_*.py call the student's modules directly: the SAT and
+# contact tests of circle-polygon pairs reach project_circle and project_vertices
+# through circle_polygon_overlap, those of polygons through polygons_overlap and
+# obbs_overlap; no test reaches the reference's momentum_1d but through its own calls).
+#: The test that gives each momentum function bad input and wants a ValueError: a replaced
+#: function that raises something else, or answers, fails it; one that raises a
+#: ValueError (whatever its message) passes it.
+BAD_INPUT = frozenset({"momentum.rejects_bad_input"})
 #: Tests that call perfectly_inelastic_1d, the function most cases poison (nothing in
 #: the reference calls it, so no other test reaches it).
-INELASTIC = frozenset({"momentum.perfectly_inelastic"})
+INELASTIC = frozenset({"momentum.perfectly_inelastic", "momentum.wall"}) | BAD_INPUT
 #: Tests that call collision_1d, directly or through elastic_collision_1d.
-COLLISION = frozenset({"momentum.elastic", "momentum.restitution"})
+COLLISION = frozenset({"momentum.elastic", "momentum.restitution", "momentum.wall"}) | BAD_INPUT
 MOMENTUM_TESTS = INELASTIC | COLLISION
+#: Tests of circle-polygon SAT: they reach project_circle (and project_vertices) through
+#: circle_polygon_overlap.
+CIRCLE_POLYGON_SAT = frozenset({"sat.circle_polygon_random", "sat.circle_off_corner", "sat.far_from_origin",
+                                "sat.circle_polygon_opposite_sides", "sat.random_against_reference",
+                                "sat.degenerate_shapes"})
 #: Tests that reach project_circle: directly, and through circle_polygon_overlap.
-PROJECT_CIRCLE = frozenset({"sat.project_circle", "sat.circle_polygon.random", "sat.circle_polygon.opposite_sides"})
-#: Tests that reach project_vertices: directly, and through the SAT tests and contacts
-#: of polygons (polygons_overlap, obbs_overlap, circle_polygon_overlap, the clipping of contacts).
-PROJECT_VERTICES = frozenset({"sat.project_vertices", "sat.polygons_overlap.random", "sat.obb_negative_coordinates",
-                              "sat.obbs_overlap.random", "sat.circle_polygon.random",
-                              "sat.circle_polygon.opposite_sides"})
-#: Tests whose functions live in (or import) narrowphase.circle_circle.
-CIRCLE_CIRCLE = frozenset({"sat.circles_overlap", "contacts.circle_circle"})
+PROJECT_CIRCLE = frozenset({"sat.project_circle"}) | CIRCLE_POLYGON_SAT
+#: Tests that reach project_vertices: directly, and through the SAT tests of polygons
+#: (polygons_overlap, obbs_overlap) and of circles against polygons.  The contact tests
+#: of polygons do not: the reference's clipping projects with its own arithmetic.
+PROJECT_VERTICES = frozenset({"sat.project_vertices", "sat.polygons_overlap_random", "sat.obbs_overlap_random",
+                              "sat.one_side_separates", "sat.obb_negative_coordinates"}) | CIRCLE_POLYGON_SAT
+#: Tests that call collide_circle_circle.
+COLLIDE_CIRCLES = frozenset({"contacts.circle_circle", "contacts.degenerate_shapes",
+                             "contacts.random_against_reference"})
+#: Tests whose functions live in narrowphase.circle_circle (circles_overlap, collide_circle_circle).
+CIRCLE_CIRCLE = frozenset({"sat.circles_overlap", "sat.degenerate_shapes", "sat.random_against_reference"}) \
+    | COLLIDE_CIRCLES
+#: The test that steps a scene with the student's resolver (grader/scene_driver.py).
+SCENE = frozenset({"impulse.scene"})
 
 FAILED_ANSWER = ("failed",)
 ERROR = ("error",)
@@ -115,6 +145,9 @@ class HostileCase:
         ``"module"`` (the file is deleted) or ``"module:qualname"`` (the function is).
     archive : str or None
         For archive cases, the kind of archive (see :func:`write_archive`).
+    layout : str or None
+        For folder cases with links or unusual files, the kind of folder (see
+        :func:`write_layout`).
     expect : tuple of Expect
         The tests the code touches and their outcome; every other test passes
         (reference) or is not implemented (stubs).
@@ -130,6 +163,7 @@ class HostileCase:
     appends: tuple[tuple[str, str | bytes], ...] = ()
     removes: tuple[str, ...] = ()
     archive: str | None = None
+    layout: str | None = None
     expect: tuple[Expect, ...] = ()
     refused: tuple[str, ...] | None = None
 
@@ -150,7 +184,19 @@ class HostileCase:
         parts += [f"(deleted: {r})" for r in self.removes]
         if self.archive:
             parts.append(f"(archive: {self.archive})")
+        if self.layout:
+            parts.append(f"(folder: {self.layout})")
         return "\n\n".join(textwrap.dedent(p).strip() for p in parts)
+
+
+def raising(tests: frozenset[str], statuses: tuple[str, ...], words: tuple[str, ...] = ()) -> tuple[Expect, ...]:
+    """The groups of code that raises (anything but a ValueError), hangs or crashes in
+    ``tests``: they end with ``statuses`` and say ``words``, but for the bad-input test,
+    which fails saying what came instead of a ValueError (or stops as the call did)."""
+    stopped = tuple(s for s in statuses if s in TIMEOUT + CRASHED)
+    groups = (Expect(tests - BAD_INPUT, statuses, words),
+              Expect(tests & BAD_INPUT, FAILED_ANSWER + stopped, () if stopped else ("must raise ValueError",)))
+    return tuple(group for group in groups if group.tests)
 
 
 def inelastic(source: str, imports: tuple[str, ...] = ()) -> tuple[Replacement, ...]:
@@ -165,7 +211,7 @@ BROKEN = (
     HostileCase(
         "broken-syntax-error", "broken", "response/momentum_1d.py ends with a function that does not parse.",
         appends=((MOMENTUM, "\n\ndef unfinished(a, b:\n    return a +\n"),),
-        expect=(Expect(MOMENTUM_TESTS, ERROR, ("could not be imported", "SyntaxError")),)),
+        expect=raising(MOMENTUM_TESTS, ERROR, ("could not be imported", "SyntaxError"))),
     HostileCase(
         "broken-import-error", "broken", "narrowphase/circle_circle.py raises an exception when it is imported.",
         appends=(("narrowphase.circle_circle", '\n\nraise RuntimeError("my module is broken")\n'),),
@@ -173,22 +219,24 @@ BROKEN = (
     HostileCase(
         "broken-missing-module", "broken", "response/momentum_1d.py is not handed in.",
         removes=(MOMENTUM,),
-        expect=(Expect(MOMENTUM_TESTS, ERROR, ("could not be imported", "No module named")),)),
+        expect=raising(MOMENTUM_TESTS, ERROR, ("could not be imported", "No module named"))),
     HostileCase(
         "broken-missing-function", "broken", "perfectly_inelastic_1d was deleted from response/momentum_1d.py.",
         removes=(f"{MOMENTUM}:perfectly_inelastic_1d",),
-        expect=(Expect(INELASTIC, ERROR, ("the function is missing", "has no perfectly_inelastic_1d")),)),
+        expect=raising(INELASTIC, ERROR, ("the function is missing", "has no perfectly_inelastic_1d"))),
     HostileCase(
         "broken-returns-none", "broken", "perfectly_inelastic_1d forgets its return statement.",
         replacements=inelastic("total = m1 * v1 + m2 * v2\ncommon = total / (m1 + m2)\n"),
-        expect=(Expect(INELASTIC, FAILED_ANSWER, ("expected a number", "got None")),)),
+        expect=(Expect(INELASTIC - BAD_INPUT, FAILED_ANSWER, ("expected a number", "got None")),
+                Expect(BAD_INPUT, FAILED_ANSWER, ("must raise ValueError", "got None")))),
     HostileCase(
         "broken-returns-string", "broken", "collision_1d returns a string.",
         replacements=(Replacement(MOMENTUM, "collision_1d", '''
             def collision_1d(m1, v1, m2, v2, restitution):
                 return "fast"
             '''),),
-        expect=(Expect(COLLISION, FAILED_ANSWER, ("must return (v1', v2')", "'fast'")),)),
+        expect=(Expect(COLLISION - BAD_INPUT, FAILED_ANSWER, ("must return (v1', v2')", "'fast'")),
+                Expect(BAD_INPUT, FAILED_ANSWER, ("must raise ValueError", "'fast'")))),
     HostileCase(
         "broken-wrong-length", "broken", "project_vertices returns three numbers instead of (min, max).",
         replacements=(Replacement(PROJECTION, "project_vertices", '''
@@ -207,17 +255,16 @@ BROKEN = (
             '''),),
         expect=(Expect(frozenset({"sat.project_circle"}), FAILED_ANSWER, ("not a finite number",)),
                 # circle_polygon_overlap compares NaN, which is always false: it says "apart" for
-                # every pair, wrong for the overlapping ones (partial credit).  Not touched:
-                # sat.circle_polygon.opposite_sides, whose pairs are all apart.
-                Expect(frozenset({"sat.circle_polygon.random"}), FAILED_ANSWER, (), partial=True))),
+                # every pair, wrong for the overlapping ones (partial credit where the test gives it).
+                Expect(CIRCLE_POLYGON_SAT, FAILED_ANSWER, (), partial=True))),
     HostileCase(
         "broken-exception", "broken", "perfectly_inelastic_1d divides by zero.",
         replacements=inelastic("return (m1 * v1 + m2 * v2) / 0\n"),
-        expect=(Expect(INELASTIC, ERROR, ("raised an exception", "ZeroDivisionError")),)),
+        expect=raising(INELASTIC, ERROR, ("raised an exception", "ZeroDivisionError"))),
     HostileCase(
         "broken-recursion", "broken", "perfectly_inelastic_1d calls itself without end.",
         replacements=inelastic("return perfectly_inelastic_1d(m1, v1, m2, v2)\n"),
-        expect=(Expect(INELASTIC, ERROR, ("recursion limit",)),)),
+        expect=raising(INELASTIC, ERROR, ("recursion limit",))),
     HostileCase(
         "broken-prints-megabytes", "broken",
         "collision_1d prints 20 MB (print, sys.stderr, raw writes to fd 1 and 2) and then fails; "
@@ -237,13 +284,15 @@ BROKEN = (
                 return (w2 * v1 + w1 * v2) / (w1 + w2)
                 '''),
         ),
-        expect=(Expect(COLLISION, ERROR,
-                       ("gave up after printing", "your code printed", "more characters not shown")),)),
+        # What was printed is cut (the worker keeps 8,000 characters per call, the test's
+        # output 4,000): the results stay small (test_every_results_file_is_valid_gradescope_json).
+        # A ValueError: the bad-input test passes.
+        expect=(Expect(COLLISION - BAD_INPUT, ERROR, ("gave up after printing", "your code printed", "spam spam")),)),
     HostileCase(
         "broken-non-utf8-source", "broken",
         "response/momentum_1d.py holds a string typed in an editor set to Latin-1 (not UTF-8, no encoding declared).",
         appends=((MOMENTUM, b'\nGREETING = "caf\xe9 cr\xe8me"\n'),),
-        expect=(Expect(MOMENTUM_TESTS, ERROR, ("could not be imported", "UTF-8")),)),
+        expect=raising(MOMENTUM_TESTS, ERROR, ("could not be imported", "UTF-8"))),
 )
 
 # --------------------------------------------------------------------------- hostile
@@ -264,14 +313,14 @@ HOSTILE = (
             while True:
                 blocks.append(np.zeros(50_000_000))
             '''),
-        expect=(Expect(INELASTIC, ERROR + CRASHED, ("memory",)),)),
+        expect=raising(INELASTIC, ERROR + CRASHED, ("memory",))),
     HostileCase(
         "hostile-fork-bomb", "hostile", "perfectly_inelastic_1d forks in a loop, every child forking too.",
         replacements=inelastic('''
             while True:
                 os.fork()
             ''', imports=("import os",)),
-        expect=(Expect(INELASTIC, ERROR + CRASHED + TIMEOUT, ()),)),
+        expect=raising(INELASTIC, ERROR + CRASHED + TIMEOUT)),
     HostileCase(
         "hostile-sleep", "hostile", "perfectly_inelastic_1d sleeps for an hour.",
         replacements=inelastic("time.sleep(3600)\n", imports=("import time",)),
@@ -279,7 +328,7 @@ HOSTILE = (
     HostileCase(
         "hostile-sys-exit", "hostile", "perfectly_inelastic_1d calls sys.exit(0) mid-test.",
         replacements=inelastic("sys.exit(0)\n", imports=("import sys",)),
-        expect=(Expect(INELASTIC, ERROR, ("sys.exit(0)",)),)),
+        expect=raising(INELASTIC, ERROR, ("sys.exit(0)",))),
     HostileCase(
         "hostile-os-exit", "hostile", "perfectly_inelastic_1d calls os._exit(0) mid-test.",
         replacements=inelastic("os._exit(0)\n", imports=("import os",)),
@@ -326,7 +375,7 @@ try:
 except Exception:
     pass
 _json.dumps = lambda *args, **kwargs: '{"id": 1, "status": "ok", "value": true}'
-for _name in ("grader", "grader.sandbox", "grader.compare", "grader.checks"):
+for _name in ("grader", "grader.sandbox", "grader.compare", "grader.plugin"):
     try:
         __import__(_name)
     except Exception:
@@ -380,8 +429,11 @@ if _worker is not None and hasattr(_worker, "Worker"):
                     return LyingList([LyingFloat(0.0)])
                 '''),
         ),
-        expect=(Expect(INELASTIC, ERROR, ("cannot read", "Liar")),
-                Expect(frozenset({"momentum.restitution"}), FAILED_ANSWER, ("must return (v1', v2'), got [0]",)))),
+        # momentum.wall and the bad-input test call collision_1d first, and stop at its liar.
+        expect=(Expect(frozenset({"momentum.perfectly_inelastic"}), ERROR, ("cannot read", "Liar")),
+                Expect(frozenset({"momentum.restitution", "momentum.wall"}), FAILED_ANSWER,
+                       ("must return (v1', v2'), got [0]",)),
+                Expect(BAD_INPUT, FAILED_ANSWER, ("must raise ValueError", "got [0]")))),
     HostileCase(
         "hostile-import-reference", "hostile",
         "perfectly_inelastic_1d imports the reference solutions by name, after adding the repository to sys.path.",
@@ -390,7 +442,7 @@ if _worker is not None and hasattr(_worker, "Worker"):
             from solutions.response.momentum_1d import perfectly_inelastic_1d as reference
             return reference(m1, v1, m2, v2)
             ''', imports=("import sys",)),
-        expect=(Expect(INELASTIC, ERROR, ("No module named 'solutions'",)),)),
+        expect=raising(INELASTIC, ERROR, ("No module named 'solutions'",))),
     HostileCase(
         "hostile-import-by-path", "hostile",
         "perfectly_inelastic_1d loads the reference module from its path with importlib.",
@@ -401,18 +453,18 @@ if _worker is not None and hasattr(_worker, "Worker"):
             spec.loader.exec_module(module)
             return module.perfectly_inelastic_1d(m1, v1, m2, v2)
             ''', imports=("import importlib.util",)),
-        expect=(Expect(INELASTIC, ERROR, ("No such file", "momentum_1d.py")),)),
+        expect=raising(INELASTIC, ERROR, ("No such file", "momentum_1d.py"))),
     HostileCase(
         "hostile-read-hidden-spec", "hostile",
-        "perfectly_inelastic_1d reads the hidden test spec and the solutions from disk.",
+        "perfectly_inelastic_1d reads the hidden tests and the solutions from disk.",
         replacements=inelastic('''
-            with open("@@REPO@@/grader/spec/hidden.toml") as handle:
+            with open("@@REPO@@/grader/tests/hidden/test_grid.py") as handle:
                 spec = handle.read()
             with open("@@REPO@@/solutions/response/momentum_1d.py") as handle:
                 solution = handle.read()
             return float(len(spec) + len(solution))
             '''),
-        expect=(Expect(INELASTIC, ERROR, ("No such file", "hidden.toml")),)),
+        expect=raising(INELASTIC, ERROR, ("No such file", "test_grid.py"))),
     HostileCase(
         "hostile-write-results", "hostile",
         "perfectly_inelastic_1d writes results.json files with full marks (its own, another student's, in "
@@ -453,7 +505,7 @@ if _worker is not None and hasattr(_worker, "Worker"):
                     errors.append(f"{target}: {exc.strerror}")
             raise PermissionError("could not write: " + "; ".join(errors))
             ''', imports=("import os",)),
-        expect=(Expect(INELASTIC, ERROR, ("could not write", "pwned.txt")),)),
+        expect=raising(INELASTIC, ERROR, ("could not write", "pwned.txt"))),
     HostileCase(
         "hostile-leave-process", "hostile",
         "perfectly_inelastic_1d leaves processes running (a sleep in a session of its own, a daemon "
@@ -476,8 +528,12 @@ if _worker is not None and hasattr(_worker, "Worker"):
         "hostile-forge-answers", "hostile",
         "perfectly_inelastic_1d writes forged answers on the worker's answer channel: lines with guessed ids "
         "and nonces, bytes that are not UTF-8, a daemon process that keeps forging, and one answer with the "
-        "request's real nonce read from the worker's memory, claiming every value is None.",
+        "request's real nonce read from the worker's memory, claiming every value is None (on its first "
+        "call; the others return 0).",
         replacements=inelastic('''
+            if getattr(perfectly_inelastic_1d, "forged", False):
+                return 0.0
+            perfectly_inelastic_1d.forged = True
             channel = int(sys.argv[1])
             frame = sys._getframe()
             while frame is not None and "nonce" not in frame.f_locals:
@@ -497,8 +553,10 @@ if _worker is not None and hasattr(_worker, "Worker"):
             os.write(channel, json.dumps(forged).encode() + b"\\n")
             return 0.0
             ''', imports=("import json", "import os", "import sys", "import time")),
-        # The forged answer is taken (it carries the nonce), and judged: None is wrong.
-        expect=(Expect(INELASTIC, FAILED_ANSWER, ("got None",)),)),
+        # The forged answer is taken (it carries the nonce), and judged: None is wrong; the
+        # later calls' 0 is wrong too.
+        expect=(Expect(frozenset({"momentum.perfectly_inelastic"}), FAILED_ANSWER, ("got None",)),
+                Expect(INELASTIC, FAILED_ANSWER))),
     HostileCase(
         "hostile-ignore-signals", "hostile",
         "perfectly_inelastic_1d ignores SIGTERM, SIGINT, SIGALRM and SIGXCPU, cancels alarms, then loops.",
@@ -519,7 +577,8 @@ if _worker is not None and hasattr(_worker, "Worker"):
                 resource.setrlimit(limit, (resource.RLIM_INFINITY, resource.RLIM_INFINITY))
             return 0.0
             ''', imports=("import resource",)),
-        expect=(Expect(INELASTIC, ERROR, ("not allowed to raise maximum limit",)),)),
+        # A ValueError: the bad-input test passes.
+        expect=(Expect(INELASTIC - BAD_INPUT, ERROR, ("not allowed to raise maximum limit",)),)),
     HostileCase(
         "hostile-huge-answer", "hostile", "perfectly_inelastic_1d returns a 70 MB string (once).",
         replacements=inelastic('''
@@ -528,7 +587,8 @@ if _worker is not None and hasattr(_worker, "Worker"):
             perfectly_inelastic_1d.sent = True
             return "x" * 70_000_000
             '''),
-        expect=(Expect(INELASTIC, ERROR, ("larger than the grader accepts",)),)),
+        # The worker is stopped after a too large answer: its new one sends it again.
+        expect=raising(INELASTIC, ERROR, ("larger than the grader accepts",))),
     HostileCase(
         "hostile-non-utf8-output", "hostile",
         "perfectly_inelastic_1d prints lone surrogates and raw bytes that are not UTF-8, then raises an "
@@ -539,7 +599,9 @@ if _worker is not None and hasattr(_worker, "Worker"):
             os.write(2, b"\\xff\\xfe\\xfd")
             raise ValueError("bad text \\udcff\\udcfe")
             ''', imports=("import os",)),
-        expect=(Expect(INELASTIC, ERROR, ("raised an exception", "ValueError: bad text", "your code printed")),)),
+        # A ValueError: the bad-input test passes.
+        expect=(Expect(INELASTIC - BAD_INPUT, ERROR,
+                       ("raised an exception", "ValueError: bad text", "your code printed")),)),
     HostileCase(
         "hostile-poison-modules", "hostile",
         "narrowphase/circle_circle.py, when imported, replaces exercises.shapes.Circle (the class the worker "
@@ -562,13 +624,164 @@ _shapes.Circle = _MovedCircle
         # (first by sat.circles_overlap, which moves both circles alike and still passes).
         expect=(
             # Contacts of moved circles keep normal and depth but not their points; a moved
-            # circle misses its box.
-            Expect(frozenset({"contacts.circle_circle", "contacts.circle_polygon"}), FAILED_ANSWER, (), partial=True),
+            # circle misses its box (contacts and SAT of circles against polygons).
+            Expect(frozenset({"contacts.circle_circle", "contacts.circle_polygon", "contacts.centre_inside",
+                              "contacts.random_against_reference", "contacts.degenerate_shapes"})
+                   | CIRCLE_POLYGON_SAT, FAILED_ANSWER, (), partial=True),
             # Bodies whose circle is off their centre of mass: other inertia, other impulses.
-            Expect(frozenset({"impulse.effective_mass", "impulse.magnitude", "impulse.scene"}), FAILED_ANSWER),
+            Expect(frozenset({"impulse.effective_mass", "impulse.magnitude"}), FAILED_ANSWER),
             # Bodies holding a moved circle come back as something the grader cannot read.
             Expect(frozenset({"impulse.apply_impulse", "impulse.resolve_collision", "impulse.correct_positions",
-                              "impulse.resolve_conserves_momentum"}), ERROR, ("cannot encode a _MovedCircle",)))),
+                              "impulse.closed_forms_any_case", "impulse.resolve_any_case",
+                              "impulse.correct_positions_any_case", "impulse.resolve_conserves_momentum"}) | SCENE,
+                   ERROR, ("cannot encode a _MovedCircle",)))),
+    # The kernel keyring outlives a sandbox: a key readable by others, stored by one
+    # submission, could be read by a later one under another uid.  The seccomp filter
+    # refuses add_key, keyctl and request_key (grader/seccomp.py).
+    HostileCase(
+        "hostile-keyring-store", "hostile",
+        "perfectly_inelastic_1d stores its module's source in the kernel keyring (a user key anyone may read, "
+        "linked into its user keyring), for a later submission under another uid; then answers rightly.",
+        replacements=inelastic('''
+            if not getattr(perfectly_inelastic_1d, "stored", False):
+                libc = ctypes.CDLL(None, use_errno=True)
+                libc.syscall.restype = ctypes.c_long
+                with open(__file__, "rb") as handle:
+                    source = handle.read()
+                serial = libc.syscall(248, b"user", b"@@KEY@@", source, ctypes.c_size_t(len(source)),
+                                      ctypes.c_int(-4))  # add_key(..., KEY_SPEC_USER_KEYRING)
+                if serial < 0:
+                    raise OSError(ctypes.get_errno(), "the kernel keyring refused add_key: "
+                                  + os.strerror(ctypes.get_errno()))
+                if libc.syscall(250, ctypes.c_int(5), ctypes.c_long(serial), ctypes.c_ulong(0x3F3F3F3F)) < 0:
+                    raise OSError(ctypes.get_errno(), "the kernel keyring refused setperm")  # KEYCTL_SETPERM
+                perfectly_inelastic_1d.stored = True
+            w1, v1, w2, v2 = _checked_pair(m1, v1, m2, v2)
+            return (w2 * v1 + w1 * v2) / (w1 + w2)
+            ''', imports=("import ctypes", "import os")),
+        expect=raising(INELASTIC, ERROR, ("the kernel keyring refused add_key", "Operation not permitted"))),
+    HostileCase(
+        "hostile-memfd-hog", "hostile",
+        "perfectly_inelastic_1d fills anonymous memory files (memfd_create), 15 MiB each up to 4 GiB: memory "
+        "outside its address-space limit; then answers rightly.",
+        replacements=inelastic('''
+            files = []
+            chunk = b"m" * (15 << 20)
+            while len(files) < 4096 // 15:
+                fd = os.memfd_create(f"hog-{len(files)}")
+                os.write(fd, chunk)
+                files.append(fd)
+            w1, v1, w2, v2 = _checked_pair(m1, v1, m2, v2)
+            return (w2 * v1 + w1 * v2) / (w1 + w2)
+            ''', imports=("import os",)),
+        # Refused by the seccomp filter; were it not, the memory cage would kill the worker.
+        expect=raising(INELASTIC, ERROR, ("memfd_create", "Operation not permitted"))),
+    HostileCase(
+        "hostile-disk-filler", "hostile",
+        "perfectly_inelastic_1d fills every folder it can write (its working folder, /tmp, /dev/shm, its "
+        "home) with 15 MiB files until it is refused, then fails saying how far it got.",
+        replacements=inelastic('''
+            chunk = b"d" * (15 << 20)
+            report = []
+            for folder in (os.getcwd(), "/tmp", "/dev/shm", os.path.expanduser("~")):
+                written = 0
+                try:
+                    for n in range(400):  # 6 GiB at most
+                        with open(os.path.join(folder, f"filler-{n}.bin"), "wb") as handle:
+                            handle.write(chunk)
+                        written += len(chunk)
+                    report.append(f"{folder}: {written >> 20} MiB, never refused")
+                except OSError as exc:
+                    report.append(f"{folder}: {written >> 20} MiB, then {exc.strerror}")
+            raise OSError("filled " + "; ".join(report))
+            ''', imports=("import os",)),
+        # The writable folders are tmpfs of Limits.disk_bytes (64 MiB) each.
+        expect=raising(INELASTIC, ERROR, ("filled", "No space left on device"))),
+    HostileCase(
+        "hostile-fork-memory-hog", "hostile",
+        "perfectly_inelastic_1d forks 4 children that each fill 900 MiB (under the per-process limit, over "
+        "the sandbox's total together) and wait; it answers rightly only if all of them lived.",
+        replacements=inelastic('''
+            children = []
+            for _ in range(4):
+                pid = os.fork()
+                if pid == 0:
+                    try:
+                        block = bytearray(900 << 20)
+                        for i in range(0, len(block), 4096):
+                            block[i] = 1  # touch every page
+                        time.sleep(1)
+                    finally:
+                        os._exit(0)
+                children.append(pid)
+            deaths = [os.waitpid(pid, 0)[1] for pid in children]
+            if any(deaths):
+                raise MemoryError(f"children killed: {sum(1 for d in deaths if d)} of {len(children)}")
+            w1, v1, w2, v2 = _checked_pair(m1, v1, m2, v2)
+            return (w2 * v1 + w1 * v2) / (w1 + w2)
+            ''', imports=("import os", "import time")),
+        # The memory cage (Limits.total_memory_bytes, 3 GiB) kills a child (MemoryError) or the
+        # worker; reclaiming memory in a full cage may take the call past its time.
+        expect=raising(INELASTIC, ERROR + CRASHED + TIMEOUT)),
+)
+
+# --------------------------------------------------------------------------- sizes
+# What a submission returns is read by the grader's own process: every size must be
+# capped before it is parsed, stored, drawn or computed with.
+
+SIZES = (
+    HostileCase(
+        "hostile-huge-contact", "hostile",
+        "collide_circle_circle returns a contact of 20,000 points (and as many depths) for every pair.",
+        replacements=(Replacement(CIRCLE_MODULE, "collide_circle_circle", '''
+            def collide_circle_circle(a, b):
+                x, y = float(a.center[0]), float(a.center[1])
+                return Contact((1.0, 0.0), 0.5, [[x + 1e-3 * i, y - 1e-3 * i] for i in range(20_000)])
+            '''),),
+        # Encoding 20,000 points per pair takes the worker seconds: a whole batch of pairs may
+        # run out of the call's time; a single pair comes back, is judged, and drawn cut short.
+        expect=(Expect(COLLIDE_CIRCLES, FAILED_ANSWER + ERROR + TIMEOUT, ()),)),
+    HostileCase(
+        "hostile-huge-message", "hostile",
+        "perfectly_inelastic_1d switches off the worker's own cap on messages and raises an exception whose "
+        "message is 40 MB long.",
+        replacements=inelastic('''
+            worker = sys.modules.get("__main__")
+            if worker is not None:
+                worker.capped = lambda text, limit=0: text
+                worker.MESSAGE_LIMIT = 10**9
+            raise ValueError("E" * 40_000_000)
+            ''', imports=("import sys",)),
+        # A ValueError: the bad-input test passes.
+        expect=(Expect(INELASTIC - BAD_INPUT, ERROR,
+                       ("raised an exception", "ValueError: EEEE", "more characters not shown")),)),
+    HostileCase(
+        "hostile-huge-trajectory", "hostile",
+        "body.py wraps Body.circle so that, once the scene driver runs (it builds its balls with it), the "
+        "driver is replaced by one returning a trajectory of 8,000 balls per step instead of its 16.",
+        appends=(("body", '''
+
+import sys as _sys
+
+
+def _enormous(steps=120, *args, **kwargs):
+    frame = [[0.0, 0.0, 0.0, 0.0]] * 8_000
+    return {"radius": 0.2, "dt": 1 / 60, "trajectory": [frame] * steps}
+
+
+_circle = Body.circle.__func__
+
+
+def _circle_and_driver(cls, *args, **kwargs):
+    driver = _sys.modules.get("scene_driver")
+    if driver is not None:
+        driver.drop_balls = _enormous
+    return _circle(cls, *args, **kwargs)
+
+
+Body.circle = classmethod(_circle_and_driver)
+'''),),
+        expect=(Expect(SCENE, FAILED_ANSWER, ("wrong shape", "16 balls", "8000 balls at step 0")),)),
 )
 
 # --------------------------------------------------------------------------- archives
@@ -590,14 +803,80 @@ ARCHIVES = (
                 "graded normally.", base="reference", archive="cp437-name"),
 )
 
+# --------------------------------------------------------------------------- layouts
+# Folders the grader reads as root before any sandbox exists: no link may lead out.
+
+LAYOUTS = (
+    HostileCase("link-exercises-to-reference", "hostile",
+                "A folder whose 'exercises' is a symbolic link to the repository's solutions/.",
+                base="stubs", layout="exercises-link", refused=("'exercises' is a symbolic link", "never follows")),
+    HostileCase("link-to-friend-folder", "hostile",
+                "A folder holding only a symbolic link to another student's folder (copy-of-reference).",
+                base="stubs", layout="folder-link", refused=("'friend' is a symbolic link", "never follows")),
+    HostileCase("link-to-friend-zip", "hostile",
+                "A folder holding only a symbolic link to another student's zip (zip-cp437-name.zip).",
+                base="stubs", layout="zip-link", refused=("'friend.zip' is a symbolic link", "never follows")),
+    HostileCase("link-as-submission", "hostile",
+                "The submission itself, as given to the grader, is a symbolic link to another student's folder.",
+                base="stubs", layout="path-link", refused=("the submission 'link-as-submission' is a symbolic link",)),
+    HostileCase("folder-sparse-file", "hostile",
+                "A folder of the stubs holding a sparse file of 2 GiB (nothing allocated).",
+                base="stubs", layout="sparse-file", refused=("2.0 GiB", "at most 64.0 MiB")),
+    HostileCase("folder-many-files", "hostile", "A folder of the stubs holding 2,100 more (empty) files.",
+                base="stubs", layout="many-files", refused=("more than 2000 files and folders",)),
+)
+
 COPIES = (
     HostileCase("copy-of-reference", "hostile",
                 "The reference solutions handed in as they are: full marks, flagged by `grader similarity`."),
 )
 
-#: Every case, in the order of the table.
-CASES: tuple[HostileCase, ...] = BROKEN + HOSTILE + ARCHIVES + COPIES
+# Graded after every other case (last in CASES): the key it looks for is stored first.
+LATER = (
+    HostileCase(
+        "hostile-keyring-fetch", "hostile",
+        "On the stubs, perfectly_inelastic_1d looks for the module hostile-keyring-store left in the kernel "
+        "keyring (its user and session keyrings, and every key /proc/keys shows), runs it if found, and "
+        "answers with it.",
+        base="stubs",
+        replacements=inelastic('''
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.syscall.restype = ctypes.c_long
+            serials = []
+            for keyring in (-4, -3):  # KEY_SPEC_USER_KEYRING, KEY_SPEC_SESSION_KEYRING
+                found = libc.syscall(250, ctypes.c_int(10), ctypes.c_int(keyring), b"user", b"@@KEY@@",
+                                     ctypes.c_int(0))  # KEYCTL_SEARCH
+                if found > 0:
+                    serials.append(found)
+            try:
+                with open("/proc/keys") as handle:
+                    serials += [int(line.split()[0], 16) for line in handle if "@@KEY@@" in line]
+            except OSError:
+                pass
+            for serial in serials:
+                buffer = ctypes.create_string_buffer(1 << 20)
+                size = libc.syscall(250, ctypes.c_int(11), ctypes.c_long(serial), buffer,
+                                    ctypes.c_size_t(len(buffer)))  # KEYCTL_READ
+                if 0 < size <= len(buffer):
+                    stolen = {}
+                    exec(compile(buffer.raw[:size], "stolen", "exec"), stolen)
+                    return stolen["perfectly_inelastic_1d"](m1, v1, m2, v2)
+            raise NotImplementedError("nothing found in the kernel keyring")
+            ''', imports=("import ctypes",)),
+        # Nothing to find: the stub's answer (not implemented), and no point.
+        expect=(Expect(INELASTIC, NOT_IMPLEMENTED + ERROR, ()),)),
+)
+
+#: Every case, in the order of the table (and of grading: hostile-keyring-fetch comes last).
+CASES: tuple[HostileCase, ...] = BROKEN + HOSTILE + SIZES + ARCHIVES + LAYOUTS + COPIES + LATER
 ESCAPED_FILE = "/tmp/grader-hostile-escaped.py"
+#: Size of the sparse file of the ``sparse-file`` layout (bytes; nothing is allocated).
+SPARSE_BYTES = 2 * 1024**3
+#: Files added by the ``many-files`` layout (more than grader.submissions.MAX_FILES).
+MANY_FILES = 2_100
+#: Where the link layouts point, inside the folder the cases are written to.
+FRIEND_FOLDER = "copy-of-reference"
+FRIEND_ZIP = "zip-cp437-name.zip"
 
 
 # --------------------------------------------------------------------------- building
@@ -613,7 +892,8 @@ def fill(text: str | bytes, params: dict[str, str]) -> str | bytes:
 
 
 def default_params() -> dict[str, str]:
-    return {"REPO": str(REPO_ROOT), "OUT": "/nonexistent-output", "SENTINEL": "/nonexistent-sentinel"}
+    return {"REPO": str(REPO_ROOT), "OUT": "/nonexistent-output", "SENTINEL": "/nonexistent-sentinel",
+            "KEY": "grader-hostile-keyring"}
 
 
 def remove_function(source: str, qualname: str) -> str:
@@ -717,10 +997,55 @@ def write_archive(case: HostileCase, path: Path, package: Path) -> Path:
     return path
 
 
+LINK_LAYOUTS = ("exercises-link", "folder-link", "zip-link", "path-link")
+
+
+def write_layout(case: HostileCase, folder: Path, params: dict[str, str] | None = None) -> Path:
+    """The case's folder at ``folder`` (which must not exist); its path to grade.
+
+    Kinds: ``exercises-link`` (a folder whose ``exercises`` is a symbolic link to
+    ``@@REPO@@/solutions``), ``folder-link`` (a folder holding only ``friend``, a link to
+    the sibling folder :data:`FRIEND_FOLDER`), ``zip-link`` (a folder holding only
+    ``friend.zip``, a link to the sibling archive :data:`FRIEND_ZIP`), ``path-link`` (the
+    case's path itself is a link to :data:`FRIEND_FOLDER`), ``sparse-file`` (the case's
+    package plus ``exercises/data.bin``, a sparse file of :data:`SPARSE_BYTES`) and
+    ``many-files`` (the package plus :data:`MANY_FILES` empty files in
+    ``exercises/padding/``).  Links are relative where they point at a sibling, so the
+    folder of cases can be moved.
+    """
+    params = {**default_params(), **(params or {})}
+    kind = case.layout
+    if kind == "path-link":
+        folder.symlink_to(FRIEND_FOLDER, target_is_directory=True)
+        return folder
+    folder.mkdir()
+    if kind == "exercises-link":
+        (folder / PACKAGE).symlink_to(Path(params["REPO"]) / "solutions", target_is_directory=True)
+    elif kind == "folder-link":
+        (folder / "friend").symlink_to(Path("..") / FRIEND_FOLDER, target_is_directory=True)
+    elif kind == "zip-link":
+        (folder / "friend.zip").symlink_to(Path("..") / FRIEND_ZIP)
+    elif kind in ("sparse-file", "many-files"):
+        package = build_package(case, folder / PACKAGE, params)
+        if kind == "sparse-file":
+            with open(package / "data.bin", "wb") as handle:
+                handle.truncate(SPARSE_BYTES)
+        else:
+            (package / "padding").mkdir()
+            for n in range(MANY_FILES):
+                (package / "padding" / f"f{n}.txt").touch()
+    else:
+        raise ValueError(f"case {case.name!r}: unknown layout {kind!r}")
+    return folder
+
+
 def build_case(case: HostileCase, out_dir: Path, params: dict[str, str] | None = None) -> Path:
-    """Write the case into ``out_dir``: a folder holding ``exercises/``, or a zip."""
+    """Write the case into ``out_dir``: a folder holding ``exercises/``, a zip, or one of
+    the folders of :func:`write_layout` (its path may be a symbolic link)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
+    if case.layout:
+        return write_layout(case, out_dir / case.name, params)
     if case.archive:
         staging = out_dir / f".{case.name}-package"
         build_package(case, staging, params)

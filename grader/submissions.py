@@ -10,6 +10,25 @@ A submission is a folder or a zip archive holding a copy of the ``exercises`` pa
 - a folder to grade: the folder itself, or a fresh temporary copy of the archive's
   regular files.
 
+Submissions are untrusted, and the grader reads them as root (on Gradescope, and
+when it runs bubblewrap), before any sandbox exists.  So nothing is ever read through
+a **symbolic link**: a link could name the reference solutions, another student's
+folder or zip, or a device.  :func:`scan_folder` walks a folder with ``lstat`` only
+and refuses the whole submission (with the link's name) at the first link it finds,
+at any depth, and at the first special file (a FIFO, a socket, a device); a path given
+on the command line (or Gradescope's ``submission`` folder) that is itself a link is
+refused too -- it is not resolved: ``class/alice -> bob`` would grade Bob's work as
+Alice's, and ``submission/exercises -> /autograder/source/solutions`` the reference
+(only the folders above the last component are resolved: they are the instructor's).
+Before anything is read, :func:`scan_folder` also caps the folder's entries
+(``MAX_FILES``) and bytes (``MAX_TOTAL_BYTES``), counting each file's apparent size
+and its allocated blocks, whichever is larger, so a 2 GiB sparse file is refused
+from its ``stat`` alone; an archive file is capped at ``MAX_ARCHIVE_BYTES`` the same
+way.  Files are then read with ``O_NOFOLLOW`` and never past the size measured
+(:func:`_file_digest`).  :func:`opened` grades a folder where it is once scanned
+(nothing writes to it while it is graded; the sandbox copies the package's regular
+files only) and an archive from a fresh temporary copy of its regular files.
+
 Archives are untrusted.  :func:`safe_extract` uses the standard library's
 :mod:`zipfile` only, checks every member before it writes anything, and refuses the
 whole archive (raising :class:`SubmissionRefused` with a message for the student) when
@@ -41,6 +60,7 @@ Examples
 """
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import os
@@ -57,8 +77,10 @@ from typing import Iterator
 
 #: Most members one archive may hold.
 MAX_FILES = 2_000
-#: Most bytes one archive may expand to (all members together).
+#: Most bytes one archive may expand to (all members together), and one folder may hold.
 MAX_TOTAL_BYTES = 64 * 1024**2
+#: Largest archive file read (bytes): what it may expand to, plus room for its headers.
+MAX_ARCHIVE_BYTES = MAX_TOTAL_BYTES + 8 * 1024**2
 #: Longest submission id (characters).
 MAX_ID_LENGTH = 80
 #: Names an id may not take: files the grader writes next to the submission folders.
@@ -97,7 +119,8 @@ class Submission:
         The folder or archive, absolute.
     kind : str
         ``"folder"`` or ``"zip"`` (every file that is not a folder is taken as an
-        archive; one that is not a zip is refused when opened, with a message).
+        archive; one that is not a zip is refused when opened, with a message), or
+        ``"link"``: the path is a symbolic link, refused when fingerprinted or opened.
     """
 
     id: str
@@ -131,22 +154,34 @@ def discover(paths: list[str | os.PathLike]) -> list[Submission]:
     so ids stay the same from one run to the next.  Raises
     :class:`SubmissionPathError` naming every path that does not exist (or is not a
     regular file or folder) before anything is graded.
+
+    A path that is itself a symbolic link is not followed: it becomes a submission of
+    kind ``"link"``, named after the link, which :func:`fingerprint` and
+    :func:`opened` refuse (see the module docstring).  The folders above it are
+    resolved (they are the instructor's choice).
     """
     found: list[tuple[str, Path, str]] = []
     missing: list[str] = []
     seen: set[Path] = set()
     for raw in paths:
         path = Path(raw).expanduser()
-        if not path.exists():
+        if not os.path.lexists(path):
             missing.append(f"{raw}: no such file or folder")
             continue
-        path = path.resolve()
+        try:
+            path = _absolute(path)
+            info = os.lstat(path)
+        except OSError as exc:
+            missing.append(f"{raw}: cannot be read ({exc.strerror or exc})")
+            continue
         if path in seen:
             continue
         seen.add(path)
-        if path.is_dir():
+        if stat.S_ISLNK(info.st_mode):
+            found.append((submission_id(path.name), path, "link"))
+        elif stat.S_ISDIR(info.st_mode):
             found.append((submission_id(path.name), path, "folder"))
-        elif path.is_file():
+        elif stat.S_ISREG(info.st_mode):
             found.append((submission_id(path.name), path, "zip"))
         else:
             missing.append(f"{raw}: not a regular file or folder")
@@ -163,11 +198,137 @@ def discover(paths: list[str | os.PathLike]) -> list[Submission]:
     return submissions
 
 
+def _absolute(path: Path) -> Path:
+    """``path`` made absolute with its folders resolved but not its last component (a
+    link stays a link); ``.``, ``..`` and the root are resolved whole."""
+    if path.name in ("", ".", ".."):
+        return path.resolve()
+    return Path(os.path.realpath(path.parent)) / path.name
+
+
+# Checking before reading -----------------------------------------------------------------
+def _mib(size: int) -> str:
+    return f"{size / 1024**2:.1f} MiB" if size < 1024**3 else f"{size / 1024**3:.1f} GiB"
+
+
+def _stored_size(info: os.stat_result) -> int:
+    """Bytes a file counts for: its apparent size or its allocated blocks, the larger
+    (a sparse file is as large as it says, a file with preallocated blocks as large as
+    its blocks)."""
+    return max(info.st_size, getattr(info, "st_blocks", 0) * 512)
+
+
+def _link_refusal(path: Path, where: str) -> SubmissionRefused:
+    try:
+        target = f" (to {_shown(os.readlink(path))})"
+    except OSError:
+        target = ""
+    return SubmissionRefused(f"{where} is a symbolic link{target}; the grader never follows links: hand in "
+                             "your files themselves (the zip `grader submit` writes never holds a link)")
+
+
+def checked_path(path: str | os.PathLike) -> os.stat_result:
+    """``lstat`` of a submission's own path: SubmissionRefused if it is a symbolic link or
+    neither a folder nor a regular file (OSError if it cannot be read)."""
+    path = Path(path)
+    info = os.lstat(path)
+    if stat.S_ISLNK(info.st_mode):
+        raise _link_refusal(path, f"the submission {_shown(path.name)}")
+    if not (stat.S_ISDIR(info.st_mode) or stat.S_ISREG(info.st_mode)):
+        raise SubmissionRefused(f"the submission {_shown(path.name)} is not a regular file or folder")
+    return info
+
+
+def check_archive_size(info: os.stat_result, name: str, limit: int = MAX_ARCHIVE_BYTES) -> int:
+    """The size of an archive file, SubmissionRefused when over ``limit`` (from ``stat``
+    alone: nothing is read)."""
+    size = _stored_size(info)
+    if size > limit:
+        raise SubmissionRefused(f"the archive {_shown(name)} is {_mib(size)}; at most {_mib(limit)} are accepted")
+    return size
+
+
+def scan_folder(folder: str | os.PathLike, max_files: int = MAX_FILES, max_total_bytes: int = MAX_TOTAL_BYTES,
+                links: str = "refuse") -> list[tuple[tuple[str, ...], int]]:
+    """Every regular file of a submission folder, as (relative path parts, size): each
+    folder's files in sorted order, then its sub-folders in sorted order.
+
+    Reads nothing but ``lstat``, and stops at the first problem, raising
+    SubmissionRefused saying what it is: a symbolic link (at any depth; links are
+    never followed), a special file, more than ``max_files`` entries (files, folders
+    and links, counted as they are listed), or more than ``max_total_bytes`` bytes (each file counted at its
+    apparent size or its allocated blocks, the larger).  Litter such as
+    ``__pycache__`` is counted too: it is on the disk, though the grader never reads it.
+    With ``links="skip"``, a symbolic link is left out (neither followed nor listed)
+    instead of refused.
+    """
+    if links not in ("refuse", "skip"):
+        raise ValueError(f"links must be 'refuse' or 'skip', got {links!r}")
+    folder = Path(folder)
+    files: list[tuple[tuple[str, ...], int]] = []
+    entries = 0
+    total = 0
+    stack: list[tuple[str, ...]] = [()]
+    while stack:
+        parts = stack.pop()
+        children = []
+        try:
+            with os.scandir(folder.joinpath(*parts)) as listing:
+                for entry in listing:  # counted as listed: a folder of millions stops at the cap
+                    entries += 1
+                    if entries > max_files:
+                        raise SubmissionRefused(f"the submission holds more than {max_files} files and folders; "
+                                                f"at most {max_files} are accepted")
+                    children.append((entry.name, entry.stat(follow_symlinks=False)))
+        except OSError as exc:
+            raise SubmissionRefused(f"the folder {_shown('/'.join(parts) or '.')} could not be read "
+                                    f"({exc.strerror or exc})") from None
+        folders = []
+        for name, info in sorted(children, key=lambda child: child[0]):
+            child = parts + (name,)
+            shown = _shown("/".join(child))
+            if stat.S_ISLNK(info.st_mode) and links == "skip":
+                continue
+            if stat.S_ISLNK(info.st_mode):
+                raise _link_refusal(folder.joinpath(*child), shown)
+            if stat.S_ISDIR(info.st_mode):
+                folders.append(child)
+            elif stat.S_ISREG(info.st_mode):
+                size = _stored_size(info)
+                total += size
+                if total > max_total_bytes:
+                    raise SubmissionRefused(
+                        f"the submission's files add up to more than {_mib(max_total_bytes)} ({shown} alone is "
+                        f"{_mib(size)}); at most {_mib(max_total_bytes)} are accepted")
+                files.append((child, info.st_size))
+            else:
+                raise SubmissionRefused(f"{shown} is not a regular file (a device, a pipe or a socket); hand in "
+                                        "your files only")
+        stack.extend(reversed(folders))  # each folder's files, then its folders in turn (as os.walk)
+    return files
+
+
 # Fingerprints --------------------------------------------------------------------------
-def _file_digest(path: Path) -> str:
+def _file_digest(path: Path, limit: int | None = None) -> str:
+    """sha256 (hex) of a regular file, read without following a link and never past
+    ``limit`` bytes: SubmissionRefused if it is longer (it grew since it was measured)."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC | getattr(os, "O_NONBLOCK", 0))
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise _link_refusal(Path(path), _shown(Path(path).name)) from None
+        raise
     digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for chunk in iter(lambda: handle.read(CHUNK), b""):
+    with open(fd, "rb", closefd=True) as handle:
+        info = os.fstat(handle.fileno())
+        if not stat.S_ISREG(info.st_mode):
+            raise SubmissionRefused(f"{_shown(Path(path).name)} is not a regular file")
+        limit = _stored_size(info) if limit is None else limit
+        read = 0
+        while chunk := handle.read(min(CHUNK, limit + 1 - read)):
+            read += len(chunk)
+            if read > limit:
+                raise SubmissionRefused(f"{_shown(Path(path).name)} grew while it was read; hand it in again")
             digest.update(chunk)
     return digest.hexdigest()
 
@@ -176,22 +337,24 @@ def fingerprint(path: str | os.PathLike) -> str:
     """sha256 (hex) of a submission: the archive's bytes, or a folder's regular files.
 
     A folder's fingerprint covers every regular file's relative path and contents,
-    in sorted order; symbolic links, ``__pycache__`` folders and ``.pyc`` files (which
-    running the code locally writes) are left out, since the grader never reads them.
+    in sorted order; ``__pycache__`` folders and ``.pyc`` files (which running the
+    code locally writes) are left out, since the grader never reads them.  The
+    submission is checked first (:func:`checked_path`, :func:`scan_folder`,
+    :func:`check_archive_size`): a link, a special file or a submission over the caps
+    raises SubmissionRefused before any file is read, and no file is read past the
+    size measured.
     """
     path = Path(path)
-    if not path.is_dir():
-        return _file_digest(path)
+    info = checked_path(path)
+    if not stat.S_ISDIR(info.st_mode):
+        return _file_digest(path, check_archive_size(info, path.name))
     digest = hashlib.sha256()
-    for root, dirs, files in os.walk(path):
-        dirs[:] = sorted(d for d in dirs if d not in IGNORED_NAMES and not os.path.islink(os.path.join(root, d)))
-        for name in sorted(files):
-            full = os.path.join(root, name)
-            if name in IGNORED_NAMES or name.endswith(".pyc") or not os.path.isfile(full) or os.path.islink(full):
-                continue
-            relative = os.path.relpath(full, path).replace(os.sep, "/")
-            digest.update(relative.encode("utf-8", "surrogateescape") + b"\0")
-            digest.update(_file_digest(Path(full)).encode() + b"\n")
+    for parts, size in scan_folder(path):
+        if _ignored(parts):
+            continue
+        relative = "/".join(parts)
+        digest.update(relative.encode("utf-8", "surrogateescape") + b"\0")
+        digest.update(_file_digest(path.joinpath(*parts), size).encode() + b"\n")
     return digest.hexdigest()
 
 
@@ -442,31 +605,62 @@ def verify_manifest(folder: str | os.PathLike) -> dict | None:
 
 
 # Opening ----------------------------------------------------------------------------------
+def _no_link_on_the_way(folder: Path, inner: Path) -> None:
+    """SubmissionRefused if ``inner`` (a folder under ``folder``) or a folder between
+    them is a symbolic link."""
+    for step in [inner, *inner.parents]:
+        if step == folder or folder not in step.parents:
+            break
+        if step.is_symlink():
+            raise _link_refusal(step, _shown(step.relative_to(folder).as_posix()))
+
+
 @contextmanager
 def opened(submission: Submission, workdir: str | os.PathLike | None = None,
-           verify: bool = True) -> Iterator[Path]:
+           verify: bool = True, links: str | None = None) -> Iterator[Path]:
     """The submission as a folder to grade (a temporary copy for an archive), removed after.
+
+    The submission is checked before anything of it is read (see the module
+    docstring): its own path must not be a symbolic link; an archive file must be
+    within ``MAX_ARCHIVE_BYTES`` (:func:`check_archive_size`) and is extracted by
+    :func:`safe_extract`; a folder is walked by :func:`scan_folder` (within the caps,
+    no special file) and then graded where it is.  ``links`` says what a symbolic link
+    inside a folder does: ``"refuse"`` (the default when ``verify``: the grader)
+    refuses the submission naming it; ``"skip"`` (the default without ``verify``:
+    :mod:`grader.similarity`, which compares code tampered or not) leaves it out of
+    the scan -- it is never followed, and a link on the way to the package is still
+    refused.
 
     A folder holding no package but exactly one zip archive is taken as that archive
     (a student who uploads the archive itself to Gradescope, say).  With ``verify``,
     a submission holding a ``MANIFEST.json`` is checked against it first
     (:func:`verify_manifest`; SubmissionRefused if it does not match).
     """
-    path = submission.path
-    if submission.kind == "folder":
+    links = links or ("refuse" if verify else "skip")
+    path = Path(submission.path)
+    try:
+        info = checked_path(path)
+    except OSError as exc:
+        raise SubmissionRefused(f"the submission could not be read ({exc.strerror or exc})") from None
+    if stat.S_ISDIR(info.st_mode):
+        scan_folder(path, links=links)
         try:
-            find_package(path)
+            package = find_package(path)
             archives = []
         except SubmissionRefused:
-            archives = [p for p in path.iterdir() if p.suffix.lower() == ".zip" and p.is_file()]
-        if len(archives) == 1:
-            with opened(Submission(submission.id, archives[0], "zip"), workdir, verify) as folder:
+            package = None
+            archives = [p for p in path.iterdir() if p.suffix.lower() == ".zip" and not p.is_symlink() and p.is_file()]
+        if package is None and len(archives) == 1:
+            with opened(Submission(submission.id, archives[0], "zip"), workdir, verify, links) as folder:
                 yield folder
-        else:
-            if verify:
-                verify_manifest(path)
-            yield path
+            return
+        if package is not None:
+            _no_link_on_the_way(path, package)
+        if verify:
+            verify_manifest(path)
+        yield path
         return
+    check_archive_size(info, path.name)
     folder = Path(tempfile.mkdtemp(prefix="submission-", dir=workdir))
     try:
         safe_extract(path, folder)

@@ -1,18 +1,26 @@
 """The grader against broken and hostile submissions (grader/hostile_cases.py).
 
 Every case of :mod:`grader.hostile_cases` is graded in ONE batch, with a clean copy of
-the reference and of the stubs, through ``grade_submissions`` with two parallel jobs.
-Each case must get what its honest work earns with a message saying what happened;
-the clean submissions must be graded exactly as when graded alone; nothing outside
-the output and temporary folders may change; no process may be left behind.  A
-second batch is killed at a random point and rerun: each submission is graded once.
+the reference and of the stubs, through ``grade_submissions`` with two parallel jobs
+-- but the cases of ``hc.SIZES``, whose answers are enormous, which go to a second,
+small batch of their own tests, timed and with the grading process's peak memory
+measured.  Each case must get what its honest work earns with a message saying what
+happened; the clean submissions must be graded exactly as when graded alone; nothing
+outside the output and temporary folders may change; no process may be left behind.
+A third batch is killed at a random point and rerun: each submission is graded once.
 
 Kept short: a subset of the spec (every exercise, the speed test that also runs the
-reference in a sandbox), and a call timeout of 6 s for the hanging cases (enough for a busy machine).
+reference in a sandbox), and a call timeout of 6 s for the hanging cases (enough for a
+busy machine).  Under pytest-xdist each batch is graded once for the whole session
+(the first worker to need it grades it, under a file lock; the other reads its record).
+``GRADER_HOSTILE_FULL_SPEC=1`` grades the main batch on the whole spec instead (some
+minutes): how the test sets of the cases were derived, and how to check them again.
 """
 from __future__ import annotations
 
+import contextlib
 import csv
+import fcntl
 import hashlib
 import json
 import os
@@ -24,6 +32,7 @@ import subprocess
 import sys
 import tempfile
 import textwrap
+import threading
 import time
 import zipfile
 from pathlib import Path
@@ -39,16 +48,37 @@ from grader.results import check_results, write_results
 from grader.sandbox import (RESPONSE_LIMIT, SANDBOX_UID_BASE, Limits, Sandbox, bwrap_available, processes_of,
                             stray_processes, uid_in_use)
 from grader.spec import load_spec
+from grader.submissions import (MAX_FILES, Submission, SubmissionRefused, checked_path, discover, fingerprint,
+                                opened, scan_folder)
 
 REPO = Path(__file__).resolve().parent.parent
 IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc")
 #: A test of every exercise, the ones the cases poison, and grid.speed (reference sandbox too).
-TEST_NAMES = ("momentum.elastic", "momentum.restitution", "momentum.perfectly_inelastic", "grid.every_cell.random",
+TEST_NAMES = ("momentum.elastic", "momentum.restitution", "momentum.perfectly_inelastic", "grid.every_cell_random",
               "sat.project_vertices", "sat.project_circle", "sat.intervals_overlap", "sat.circles_overlap",
               "contacts.circle_circle", "impulse.apply_impulse", "grid.speed")
+#: Every test when set: the main batch then takes minutes (how the case's test sets were derived).
+FULL_SPEC = os.environ.get("GRADER_HOSTILE_FULL_SPEC", "") not in ("", "0")
 LIMITS = Limits(call_timeout=6.0)
 PER_TEST_SECONDS = 20.0
-PER_SUBMISSION_SECONDS = 60.0
+PER_SUBMISSION_SECONDS = 60.0 if not FULL_SPEC else 600.0
+#: The cases whose answers are enormous, graded apart on the tests they reach (and one they do not).
+SIZE_CASES = tuple(c.name for c in hc.SIZES)
+SIZE_TEST_NAMES = ("contacts.circle_circle", "contacts.degenerate_shapes", "momentum.perfectly_inelastic",
+                   "momentum.elastic", "impulse.scene")
+#: Seconds a test of a size case may take (the reference takes about one; most of the rest is
+#: the student's worker encoding its own enormous answer), and its whole submission.
+SIZE_TEST_SECONDS = 20.0
+SIZE_SUBMISSION_SECONDS = 40.0
+#: Peak resident memory of a grading process (the parent of the sandboxes) over the size
+#: batch.  Measured: about 130 MiB grading the reference, 450 MiB with the 8,000-ball scene
+#: (parsing its 21 MB answer); a 8,000 x 8,000 distance matrix alone would be 1 GiB.
+PARENT_MEMORY_BYTES = 768 * 1024**2
+#: Longest list a figure kept in results.json may hold (grader.figures.FIGURE_CAPS).
+FIGURE_LIST_CAP = 4000
+#: What the hostile cases write (hostile-write-outside appends the first, hostile-write-results
+#: writes the second): a repository file holding one was written by them.
+HOSTILE_MARKERS = (b"pwned\n", b'"output": "full marks"')
 #: Folders of the repository that running the tests may change (caches, builds, outputs).
 GENERATED = {".git", ".venv", "out", "_build", "__pycache__", ".pytest_cache", ".hypothesis", ".ipynb_checkpoints",
              "collision_course.egg-info", "_vendor", ".jupyter_cache", "build", "dist"}
@@ -58,15 +88,21 @@ needs_sandbox = pytest.mark.skipif(not bwrap_available(),
 
 # Helpers ------------------------------------------------------------------------------------
 def snapshot(root: Path, skip: set[str] = GENERATED) -> dict[str, str]:
-    """sha256 of every file under ``root`` (generated folders left out), by relative path."""
+    """sha256 of every file under ``root`` (generated folders left out), by relative path;
+    links by their target, files over 1 MiB (the sparse case's 2 GiB) by size and time."""
     found = {}
     for folder, dirs, files in os.walk(root):
         dirs[:] = [d for d in dirs if d not in skip]
-        for name in files:
+        for name in files + [d for d in dirs if os.path.islink(os.path.join(folder, d))]:
             path = Path(folder) / name
             try:
-                found[str(path.relative_to(root))] = hashlib.sha256(path.read_bytes()).hexdigest() \
-                    if not path.is_symlink() else "link:" + os.readlink(path)
+                info = path.lstat()
+                if stat.S_ISLNK(info.st_mode):
+                    found[str(path.relative_to(root))] = "link:" + os.readlink(path)
+                elif info.st_size > 1 << 20:
+                    found[str(path.relative_to(root))] = f"size:{info.st_size}:{info.st_mtime_ns}"
+                else:
+                    found[str(path.relative_to(root))] = hashlib.sha256(path.read_bytes()).hexdigest()
             except OSError as exc:
                 found[str(path.relative_to(root))] = f"unreadable: {exc.errno}"
     return found
@@ -74,6 +110,23 @@ def snapshot(root: Path, skip: set[str] = GENERATED) -> dict[str, str]:
 
 def changed(before: dict[str, str], after: dict[str, str]) -> list[str]:
     return sorted(k for k in set(before) | set(after) if before.get(k) != after.get(k))
+
+
+def written_by_hostile_code(root: Path, names: list[str]) -> list[str]:
+    """Of the files of ``root`` that changed, those the hostile cases wrote: holding one of
+    their markers, or new and named like what they forge.  (The repository is shared:
+    people may edit it while the batch runs; a student's write shows its marker.)"""
+    found = []
+    for name in names:
+        path = root / name
+        forged = path.name in ("results.json", "gradebook.csv", "grading_log.jsonl") or path.name.startswith("pwned")
+        try:
+            data = path.read_bytes() if path.is_file() and path.stat().st_size < 1 << 24 else b""
+        except OSError:
+            data = b""
+        if forged or data.endswith(HOSTILE_MARKERS[0]) or HOSTILE_MARKERS[1] in data:
+            found.append(name)
+    return found
 
 
 def processes_mentioning(text: str) -> list[str]:
@@ -114,39 +167,150 @@ def outcomes(data: dict) -> dict[str, tuple]:
             for t in data["tests"]}
 
 
-@pytest.fixture(scope="module")
-def tests():
-    chosen = [t for t in load_spec() if t.name in TEST_NAMES]
-    assert len(chosen) == len(TEST_NAMES)
+def spec_tests(names) -> list:
+    chosen = [t for t in load_spec() if names is None or t.name in names]
+    assert names is None or len(chosen) == len(names)
     return chosen
 
 
 @pytest.fixture(scope="module")
-def batch(tmp_path_factory, tests):
-    """Every case, the reference and the stubs, graded together (two jobs)."""
-    if not bwrap_available():
-        pytest.skip("the hostile batch needs bubblewrap and root")
-    root = tmp_path_factory.mktemp("hostile")
+def tests():
+    return spec_tests(None if FULL_SPEC else TEST_NAMES)
+
+
+@pytest.fixture(scope="module")
+def size_tests():
+    return spec_tests(SIZE_TEST_NAMES)
+
+
+def once_per_session(tmp_path_factory, name: str, build, meanwhile=None) -> SimpleNamespace:
+    """``build(folder)`` (a JSON-able dict) run once for the whole test session: under
+    pytest-xdist the first worker to get here builds it holding a file lock, the
+    others wait for it and read its record (calling ``meanwhile()`` first, when given:
+    another batch to grade while they wait).  Paths come back as Path."""
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent  # shared by the workers of this session
+    record = base / f"{name}.json"
+    with open(base / f"{name}.lock", "w") as lock:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            if meanwhile is not None:
+                meanwhile()
+            fcntl.flock(lock, fcntl.LOCK_EX)
+        if not record.exists():
+            folder = base / name
+            shutil.rmtree(folder, ignore_errors=True)
+            folder.mkdir()
+            record.write_text(json.dumps(build(folder)))
+        data = json.loads(record.read_text())
+    for key in ("root", "subs", "out", "sentinel"):
+        if key in data:
+            data[key] = Path(data[key])
+    data["paths"] = {k: Path(v) for k, v in data["paths"].items()}
+    return SimpleNamespace(**data)
+
+
+class PeakMemory:
+    """The peak resident memory (VmHWM, bytes) of this process's child processes whose
+    command line holds ``pattern`` (the grading workers), polled while in use."""
+
+    def __init__(self, pattern: str = "grader.grade"):
+        self.pattern = pattern
+        self.peak = 0
+        self.seen: set[int] = set()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def _children(self) -> list[str]:
+        found = []
+        for task in os.listdir("/proc/self/task"):
+            try:
+                found += open(f"/proc/self/task/{task}/children").read().split()
+            except OSError:
+                pass
+        return found
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            for pid in self._children():
+                try:
+                    if self.pattern not in open(f"/proc/{pid}/cmdline").read().replace("\0", " "):
+                        continue
+                    with open(f"/proc/{pid}/status") as handle:
+                        fields = dict(line.split(":", 1) for line in handle if ":" in line)
+                    self.peak = max(self.peak, int(fields["VmHWM"].split()[0]) * 1024)
+                    self.seen.add(int(pid))
+                except (OSError, KeyError, ValueError):
+                    pass
+            self._stop.wait(0.05)
+
+    def __enter__(self) -> "PeakMemory":
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        self._thread.join()
+
+
+def grade_cases(folder: Path, cases, tests, reference: bool = True, stubs: bool = True,
+                measure: bool = False) -> dict:
+    """Build ``cases`` (and clean submissions) in ``folder`` and grade them in one batch."""
+    root = folder
     subs, out, sentinel = root / "subs", root / "out", root / "sentinel"
     sentinel.mkdir()
     (sentinel / "keep.txt").write_text("the sentinel's own file\n")
     os.chmod(sentinel, 0o777)  # writable by anyone: only the sandbox can keep a student out
-    paths = hc.build_cases(subs, {"OUT": str(out), "SENTINEL": str(sentinel), "REPO": str(REPO)})
-    paths["reference"] = copy_submission(subs / "reference", REPO / "solutions")
-    paths["stubs"] = copy_submission(subs / "stubs", REPO / "exercises")
+    key = f"grader-hostile-{os.getpid()}-{secrets_token()}"
+    paths = hc.build_cases(subs, {"OUT": str(out), "SENTINEL": str(sentinel), "REPO": str(REPO), "KEY": key},
+                           tuple(cases))
+    if reference:
+        paths["reference"] = copy_submission(subs / "reference", REPO / "solutions")
+    if stubs:
+        paths["stubs"] = copy_submission(subs / "stubs", REPO / "exercises")
     assert not Path(hc.ESCAPED_FILE).exists()
     before = {"repo": snapshot(REPO), "sentinel": snapshot(sentinel), "subs": snapshot(subs)}
     strays_before = stray_processes()
     started = time.perf_counter()
-    rows = grade_submissions(list(paths.values()), out, jobs=2, tests=tests, limits=LIMITS,
-                             per_test_seconds=PER_TEST_SECONDS, per_submission_seconds=PER_SUBMISSION_SECONDS,
-                             progress=False)
+    memory = PeakMemory()
+    with memory if measure else contextlib.nullcontext():
+        rows = grade_submissions(list(paths.values()), out, jobs=2, tests=tests, limits=LIMITS,
+                                 per_test_seconds=PER_TEST_SECONDS, per_submission_seconds=PER_SUBMISSION_SECONDS,
+                                 progress=False)
     seconds = time.perf_counter() - started
     strays, mentions = wait_for_no_leftovers(root)
     after = {"repo": snapshot(REPO), "sentinel": snapshot(sentinel), "subs": snapshot(subs)}
-    return SimpleNamespace(root=root, subs=subs, out=out, sentinel=sentinel, paths=paths,
-                           rows={r["id"]: r for r in rows}, seconds=seconds, before=before, after=after,
-                           strays=strays, strays_before=strays_before, mentions=mentions)
+    return dict(root=str(root), subs=str(subs), out=str(out), sentinel=str(sentinel),
+                paths={k: str(v) for k, v in paths.items()}, rows={r["id"]: r for r in rows}, seconds=seconds,
+                before=before, after=after, strays=strays, strays_before=strays_before, mentions=mentions,
+                peak_memory=memory.peak, grading_processes=len(memory.seen))
+
+
+def secrets_token() -> str:
+    return os.urandom(4).hex()
+
+
+@pytest.fixture(scope="module")
+def batch(request, tmp_path_factory, tests):
+    """Every case but the size cases, the reference and the stubs, graded together (two jobs)."""
+    if not bwrap_available():
+        pytest.skip("the hostile batch needs bubblewrap and root")
+    cases = [c for c in hc.CASES if c.name not in SIZE_CASES]
+    return once_per_session(tmp_path_factory, "hostile-full" if FULL_SPEC else "hostile",
+                            lambda folder: grade_cases(folder, cases, tests),
+                            meanwhile=lambda: request.getfixturevalue("size_batch"))
+
+
+@pytest.fixture(scope="module")
+def size_batch(tmp_path_factory, size_tests):
+    """The size cases and the reference, on the tests the cases reach, timed, with the
+    grading processes' peak memory measured."""
+    if not bwrap_available():
+        pytest.skip("the hostile batch needs bubblewrap and root")
+    return once_per_session(tmp_path_factory, "hostile-sizes",
+                            lambda folder: grade_cases(folder, hc.SIZES, size_tests, stubs=False, measure=True))
 
 
 def results_of(batch, name: str) -> dict:
@@ -156,11 +320,11 @@ def results_of(batch, name: str) -> dict:
 # The cases ------------------------------------------------------------------------------------------
 def test_the_cases_are_all_there_and_distinct():
     names = [c.name for c in hc.CASES]
-    assert len(names) == len(set(names))
+    assert len(names) == len(set(names)) and len(names) == 55
     spec = {t.name for t in load_spec()}
     for case in hc.CASES:
         assert case.category in ("broken", "hostile") and case.what and case.base in ("reference", "stubs")
-        assert (case.refused is not None) == bool(case.archive and case.archive != "cp437-name")
+        assert (case.refused is not None) == bool(case.layout or (case.archive and case.archive != "cp437-name"))
         assert case.touched <= spec | {"*"}, case.name
         assert case.code or case.name == "copy-of-reference"
     covered = " ".join(names)
@@ -169,13 +333,24 @@ def test_the_cases_are_all_there_and_distinct():
                  "infinite-loop", "memory-bomb", "fork-bomb", "sleep", "sys-exit", "os-exit", "kill-parent",
                  "segfault", "monkeypatch", "lying-objects", "import-reference", "import-by-path", "read-hidden",
                  "write-results", "write-outside", "leave-process", "dotdot", "absolute", "symlink", "zip-bomb",
-                 "copy-of-reference"):
+                 "copy-of-reference", "keyring-store", "keyring-fetch", "memfd", "disk-filler", "fork-memory",
+                 "huge-contact", "huge-message", "huge-trajectory", "link-exercises", "link-to-friend-folder",
+                 "link-to-friend-zip", "link-as-submission", "sparse-file", "many-files"):
         assert word in covered, word
+    # The key is stored before it is looked for: the batch grades in this order.
+    assert names.index("hostile-keyring-fetch") == len(names) - 1
+    assert SIZE_CASES and set(SIZE_CASES) <= set(names)
+    for name in SIZE_CASES:  # a size case reaches tests of the size batch only
+        touched = next(c for c in hc.CASES if c.name == name).touched
+        assert touched & set(SIZE_TEST_NAMES), name
 
 
 @needs_sandbox
 @pytest.mark.parametrize("case", hc.CASES, ids=lambda c: c.name)
-def test_each_case_earns_what_its_honest_work_earns(batch, tests, case):
+def test_each_case_earns_what_its_honest_work_earns(request, case):
+    sizes = case.name in SIZE_CASES
+    batch = request.getfixturevalue("size_batch" if sizes else "batch")
+    tests = request.getfixturevalue("size_tests" if sizes else "tests")
     data = results_of(batch, case.name)
     assert hc.problems(case, data, tests) == []
     if case.refused is None:
@@ -184,6 +359,46 @@ def test_each_case_earns_what_its_honest_work_earns(batch, tests, case):
             t.points for t in tests if (e := hc.expectation(case, t.name)) is not None and e.partial)
     else:
         assert batch.rows[case.name]["state"] == "refused"
+
+
+@needs_sandbox
+def test_enormous_answers_cost_their_own_tests_quickly_and_the_grader_stays_small(size_batch, size_tests):
+    """A 20,000-point contact, a 40 MB message, an 8,000-ball scene: each test they touch
+    ends in seconds, and the grading process (which parses, stores and draws what comes
+    back) keeps a bounded memory."""
+    for name in SIZE_CASES:
+        data = results_of(size_batch, name)
+        case = next(c for c in hc.CASES if c.name == name)
+        for test in data["tests"]:
+            seconds = test["extra_data"]["seconds"]
+            assert seconds < SIZE_TEST_SECONDS, f"{name}: {test['extra_data']['test']} took {seconds:.1f} s"
+        assert data["execution_time"] < SIZE_SUBMISSION_SECONDS, f"{name}: {data['execution_time']} s"
+        assert case.touched and all(hc.expectation(case, t.name) is None or t.name in case.touched
+                                    for t in size_tests)
+    assert size_batch.grading_processes >= 1, "no grading process was measured"
+    assert 0 < size_batch.peak_memory < PARENT_MEMORY_BYTES, \
+        f"a grading process reached {size_batch.peak_memory / 1024**2:.0f} MiB"
+    reference = results_of(size_batch, "reference")
+    assert reference["score"] == sum(t.points for t in size_tests)
+
+
+def longest_list(value) -> int:
+    if isinstance(value, dict):
+        return max((longest_list(v) for v in value.values()), default=0)
+    if isinstance(value, list):
+        return max([len(value), *(longest_list(v) for v in value)])
+    return 0
+
+
+@needs_sandbox
+@pytest.mark.xfail(strict=True, reason=(
+    "grader/figures.py: bounded() cuts a contact's points to FIGURE_CAPS but not its depths, so the figure "
+    "kept in results.json (extra_data.figure) holds all 20,000 depths of hostile-huge-contact"))
+def test_a_figure_kept_in_the_results_holds_no_list_longer_than_its_caps(size_batch):
+    for name in SIZE_CASES:
+        for test in results_of(size_batch, name)["tests"]:
+            figure = test["extra_data"].get("figure")
+            assert longest_list(figure) <= FIGURE_LIST_CAP, f"{name}: {test['extra_data']['test']}"
 
 
 @needs_sandbox
@@ -219,13 +434,19 @@ def test_the_copy_of_the_reference_is_flagged_and_the_others_are_not(batch, tmp_
 
 
 @needs_sandbox
-def test_every_results_file_is_valid_gradescope_json(batch):
-    for name in batch.paths:
-        raw = (batch.out / name / "results.json").read_bytes()
-        data = json.loads(raw.decode("utf-8"))  # valid UTF-8, whatever the student printed
-        assert check_results(data) == [], name
-        assert len(raw) < 400_000, f"{name}: results.json of {len(raw)} bytes"
-        assert (batch.out / name / "report.html").is_file()
+def test_every_results_file_is_valid_gradescope_json(batch, size_batch):
+    for graded in (batch, size_batch):
+        for name in graded.paths:
+            raw = (graded.out / name / "results.json").read_bytes()
+            data = json.loads(raw.decode("utf-8"))  # valid UTF-8, whatever the student printed
+            assert check_results(data) == [], name
+            # Each test's entry stays small whatever the code printed, raised or returned (a
+            # picture is cut at 300 KB); the whole file too, on this batch's dozen tests.
+            for test in data["tests"]:
+                size = len(json.dumps(test))
+                assert size < 350_000, f"{name}: {test['extra_data']['test']}'s entry is {size} bytes"
+            assert FULL_SPEC or len(raw) < 400_000, f"{name}: results.json of {len(raw)} bytes"
+            assert (graded.out / name / "report.html").is_file()
 
 
 @needs_sandbox
@@ -241,7 +462,7 @@ def test_forged_results_and_gradebook_are_not_kept(batch, tests):
     expected = {p.name for p in batch.out.iterdir()}
     assert expected == {*batch.paths, "gradebook.csv", "class_report.html", LOG_NAME, ".grader.lock"}, expected
     for name in batch.paths:
-        assert {p.name for p in (batch.out / name).iterdir()} <= {"results.json", "report.html"}, name
+        assert {p.name for p in (batch.out / name).iterdir()} <= {"results.json", "report.html", "feedback.html"}, name
 
 
 @needs_sandbox
@@ -252,28 +473,40 @@ def test_each_submission_is_graded_once(batch):
 
 @needs_sandbox
 def test_no_file_outside_the_output_changes(batch):
-    for where in ("repo", "sentinel", "subs"):
+    for where in ("sentinel", "subs"):
         assert changed(batch.before[where], batch.after[where]) == [], where
+    assert written_by_hostile_code(REPO, changed(batch.before["repo"], batch.after["repo"])) == []
     assert not Path(hc.ESCAPED_FILE).exists()
     assert not (batch.root / "escaped.py").exists() and not (batch.subs.parent / "escaped.py").exists()
     assert not list(batch.root.rglob("pwned*"))
 
 
 @needs_sandbox
-def test_no_process_is_left_running(batch):
-    assert batch.strays_before == [] or set(batch.strays) <= set(batch.strays_before)
-    assert batch.strays == [], f"processes of sandbox users nobody holds: {batch.strays}"
-    assert batch.mentions == [], batch.mentions
-    assert not (batch.out / ".work").exists()
+def test_no_process_is_left_running(batch, size_batch):
+    for graded in (batch, size_batch):
+        assert graded.strays == [], f"processes of sandbox users nobody holds: {graded.strays}"
+        assert graded.mentions == [], graded.mentions
+        assert not (graded.out / ".work").exists()
 
 
 @needs_sandbox
-def test_the_batch_takes_a_reasonable_time(batch):
-    assert batch.seconds < 150, f"the hostile batch took {batch.seconds:.0f} s"
+def test_the_batch_takes_a_reasonable_time(batch, size_batch):
+    assert FULL_SPEC or batch.seconds < 150, f"the hostile batch took {batch.seconds:.0f} s"
+    assert size_batch.seconds < 90, f"the batch of enormous answers took {size_batch.seconds:.0f} s"
+    refused = [c.name for c in hc.CASES if c.layout]
+    for name in refused:  # refused from their stat alone, before any worker was busy
+        assert results_of(batch, name)["execution_time"] == 0, name
 
 
 # Killed and rerun ------------------------------------------------------------------------------------
-KILL_TESTS = "momentum.*,sat.project_circle"
+KILL_TESTS = "momentum.elastic,momentum.restitution,momentum.perfectly_inelastic,sat.project_circle"
+#: The cases of the killed batch: quick ones, those that leave processes or forge, refusals,
+#: and two that hang (graded last: whenever the kill comes, something is still running).
+KILL_CASES = ("broken-syntax-error", "broken-returns-none", "broken-exception", "hostile-memory-bomb",
+              "hostile-fork-bomb", "hostile-sys-exit", "hostile-os-exit", "hostile-kill-parent", "hostile-segfault",
+              "hostile-write-results", "hostile-leave-process", "hostile-forge-answers", "hostile-huge-answer",
+              "broken-nan-inf", "zip-dotdot", "link-to-friend-folder", "folder-sparse-file", "copy-of-reference")
+KILL_LAST = ("hostile-sleep", "hostile-ignore-signals")
 
 
 def grade_cli(*args, **kwargs) -> subprocess.Popen:
@@ -286,19 +519,22 @@ def test_a_hostile_batch_killed_at_a_random_point_is_graded_once_on_rerun(tmp_pa
     seed = int.from_bytes(os.urandom(4), "little")
     rng = random.Random(seed)
     out = tmp_path / "out"
-    paths = hc.build_cases(tmp_path / "subs", {"OUT": str(out), "SENTINEL": str(tmp_path / "sentinel")})
+    cases = tuple(c for c in hc.CASES if c.name in KILL_CASES) + tuple(c for c in hc.CASES if c.name in KILL_LAST)
+    paths = hc.build_cases(tmp_path / "subs", {"OUT": str(out), "SENTINEL": str(tmp_path / "sentinel")}, cases)
     paths["reference"] = copy_submission(tmp_path / "subs" / "reference", REPO / "solutions")
+    paths = {name: paths[name] for name in sorted(paths, key=lambda n: n in KILL_LAST)}
     subs = list(paths.values())
+    refused_at_once = {c.name for c in cases if c.layout}  # refused before any worker starts
     options = ["--out", out, "--jobs", "2", "--no-progress", "--no-html", "--tests", KILL_TESTS,
                "--timeout-call", "6", "--timeout-test", "15"]
     process = grade_cli(*subs, *options, start_new_session=True)
     deadline = time.monotonic() + 120
     try:
-        while not list(out.glob("*/results.json")):
+        while not [p for p in out.glob("*/results.json") if p.parent.name not in refused_at_once]:
             assert process.poll() is None, process.communicate()
             assert time.monotonic() < deadline, "no results.json appeared in 120 s"
             time.sleep(0.02)
-        time.sleep(rng.uniform(0.0, 6.0))
+        time.sleep(rng.uniform(0.0, 5.0))
     finally:
         os.killpg(process.pid, signal.SIGKILL)
         process.communicate()
@@ -310,7 +546,7 @@ def test_a_hostile_batch_killed_at_a_random_point_is_graded_once_on_rerun(tmp_pa
     stdout, stderr = process.communicate(timeout=300)
     assert process.returncode == 0, f"seed {seed}: {stderr}"
     assert f"{len(subs)} submissions:" in stdout and f"{len(done)} skipped" in stdout, f"seed {seed}: {stdout}"
-    tests = [t for t in load_spec() if t.name.startswith("momentum.") or t.name == "sat.project_circle"]
+    tests = [t for t in load_spec() if t.name in KILL_TESTS.split(",")]
     for name in paths:
         path = out / name / "results.json"
         assert path.exists(), f"seed {seed}: {name} has no results"
@@ -346,7 +582,7 @@ def test_gradescope_locks_the_solutions_away_before_grading(tmp_path):
         shutil.copy(root / "source" / "run_autograder", root / "run_autograder")
         case = next(c for c in hc.CASES if c.name == "hostile-read-hidden-spec")
         hc.build_package(case, root / "submission" / "exercises", {"REPO": str(root / "source")})
-        hidden = root / "source" / "grader" / "spec" / "hidden.toml"
+        hidden = root / "source" / "grader" / "tests" / "hidden" / "test_grid.py"
 
         def read_as_another_user() -> subprocess.CompletedProcess:
             return subprocess.run(["setpriv", "--reuid=62500", "--regid=62500", "--clear-groups", "cat", str(hidden)],
@@ -367,7 +603,19 @@ def test_gradescope_locks_the_solutions_away_before_grading(tmp_path):
         stolen = by_name["momentum.perfectly_inelastic"]
         assert stolen["extra_data"]["status"] == "error" and stolen["score"] == 0
         assert "No such file" in stolen["output"] or "Permission denied" in stolen["output"]
-        assert all(t["status"] == "passed" for n, t in by_name.items() if n != "momentum.perfectly_inelastic")
+        for name, test in by_name.items():  # what the case's code reaches earns nothing, the rest passes
+            assert test["score"] == 0 if name in case.touched else test["status"] == "passed", name
+        # An upload whose exercises is a link to the reference: root would read the
+        # solutions before any sandbox starts; it is refused instead.
+        shutil.rmtree(root / "submission")
+        (root / "submission").mkdir()
+        (root / "submission" / "exercises").symlink_to(root / "source" / "solutions", target_is_directory=True)
+        completed = subprocess.run(["bash", str(root / "run_autograder")], cwd=root, env=env, capture_output=True,
+                                   text=True, timeout=240)
+        assert completed.returncode == 0, completed.stdout + completed.stderr
+        data = json.loads((root / "results" / "results.json").read_text())
+        assert data["score"] == 0 and data["extra_data"]["state"] == "refused", data["output"]
+        assert "'exercises' is a symbolic link" in data["output"], data["output"]
     finally:
         shutil.rmtree(base, ignore_errors=True)
 
@@ -496,6 +744,18 @@ def hog_after_answering():
     threading.Thread(target=hog, daemon=True).start()
     return 1
 
+def forge_then_flood():
+    """An answer with the real nonce (taken at once), then, a moment later, lines of junk
+    that fill the channel, nobody reading it between two calls."""
+    import time
+    here = _frame_with("nonce")
+    forged = {"id": here["number"], "nonce": here["nonce"], "status": "ok", "value": 1}
+    os.write(int(sys.argv[1]), (json.dumps(forged) + "\\n").encode())
+    time.sleep(0.5)
+    for _ in range(100):
+        os.write(int(sys.argv[1]), b"junk " * 20_000 + b"\\n")
+    return 1
+
 def echo(value):
     return len(value)
 
@@ -546,6 +806,17 @@ def test_a_worker_that_stops_reading_its_requests_times_out(channel_box):
     assert channel_box.call("exercises.channel", "add", [1, 1]).value == 2
 
 
+@pytest.mark.xfail(strict=True, reason=(
+    "grader/sandbox.py: Sandbox._send does not read the answer channel while it waits to write a request: a "
+    "worker blocked writing to a channel full of lines it wrote after its answer was taken, and a request "
+    "larger than a pipe, wait for each other until the call times out (found by hostile-forge-answers, "
+    "which made the next test, quadtree.random, time out)"))
+def test_a_channel_filled_after_the_answer_does_not_stall_the_next_large_request(channel_box):
+    assert channel_box.call("exercises.channel", "forge_then_flood").value == 1
+    result = channel_box.call("exercises.channel", "echo", ["x" * 2_000_000], timeout=3.0)
+    assert result.status == "ok" and result.value == 2_000_000, result.message
+
+
 def test_a_worker_that_closes_its_channel_is_stopped(channel_box):
     started = time.perf_counter()
     result = channel_box.call("exercises.channel", "close_channel")
@@ -585,3 +856,148 @@ def test_a_partial_line_left_on_the_channel_does_not_spoil_the_next_answer(tmp_p
     with Sandbox(package, Limits(call_timeout=10.0)) as box:
         assert box.call("exercises.partial", "leave_a_partial_line").value == 5
         assert box.call("exercises.partial", "add", [2, 3]).value == 5
+
+
+# Submissions are checked before they are read --------------------------------------------------------
+def stub_folder(path: Path) -> Path:
+    (path / "exercises").mkdir(parents=True)
+    (path / "exercises" / "__init__.py").write_text("")
+    return path
+
+
+def bytes_read() -> int:
+    """Bytes this process has read with read() and the like so far (/proc/self/io)."""
+    with open("/proc/self/io") as handle:
+        return int(dict(line.split(": ") for line in handle.read().splitlines())["rchar"])
+
+
+def refusal(path: Path, **kwargs) -> str:
+    """The reason ``opened`` refuses the submission at ``path`` (it must), checked to be
+    the reason ``fingerprint`` gives too (for a folder) -- links=skip only for opened."""
+    submission = discover([path])[0]
+    with pytest.raises(SubmissionRefused) as refused:
+        with opened(submission, **kwargs):
+            pass
+    return str(refused.value)
+
+
+def test_a_sparse_file_is_refused_from_its_size_before_any_byte_is_read(tmp_path):
+    folder = stub_folder(tmp_path / "sparse")
+    with open(folder / "exercises" / "data.bin", "wb") as handle:
+        handle.truncate(2 * 1024**3)
+    before, started = bytes_read(), time.perf_counter()
+    with pytest.raises(SubmissionRefused, match=r"data.bin' alone is 2.0 GiB"):
+        fingerprint(folder)
+    assert bytes_read() - before < 64 * 1024 and time.perf_counter() - started < 1.0
+    assert "at most 64.0 MiB" in refusal(folder)
+    zipped = tmp_path / "sparse.zip"
+    with open(zipped, "wb") as handle:  # an "archive" of 2 GiB: not even its bytes are hashed
+        handle.truncate(2 * 1024**3)
+    before = bytes_read()
+    with pytest.raises(SubmissionRefused, match="the archive 'sparse.zip' is 2.0 GiB"):
+        fingerprint(zipped)
+    assert bytes_read() - before < 64 * 1024
+    assert "is 2.0 GiB" in refusal(zipped)
+
+
+def test_a_folder_is_capped_in_files_and_bytes(tmp_path):
+    many = stub_folder(tmp_path / "many")
+    for n in range(MAX_FILES):
+        (many / "exercises" / f"f{n}.txt").touch()
+    assert f"more than {MAX_FILES} files and folders" in refusal(many)
+    heavy = stub_folder(tmp_path / "heavy")
+    for n in range(3):
+        (heavy / "exercises" / f"part{n}.bin").write_bytes(b"x" * 1000)
+    with pytest.raises(SubmissionRefused, match="add up to more than"):
+        scan_folder(heavy, max_total_bytes=2500)
+    assert len(scan_folder(heavy)) == 4
+
+
+def test_a_symbolic_link_anywhere_in_a_submission_is_refused_not_followed(tmp_path):
+    friend = stub_folder(tmp_path / "friend")
+    (friend / "exercises" / "secret.py").write_text("ANSWER = 42\n")
+    shutil.make_archive(str(tmp_path / "friend"), "zip", friend)
+    layouts = {
+        "package": lambda f: (f / "exercises").symlink_to(REPO / "solutions", target_is_directory=True),
+        "module": lambda f: (stub_folder(f) / "exercises" / "momentum.py").symlink_to(
+            friend / "exercises" / "secret.py"),
+        "nested": lambda f: (stub_folder(f) / "exercises" / "more").symlink_to(tmp_path, target_is_directory=True),
+        "friend-link": lambda f: (f / "friend").symlink_to(Path("..") / "friend", target_is_directory=True),
+        "zip": lambda f: (f / "friend.zip").symlink_to(tmp_path / "friend.zip"),
+        "dangling": lambda f: (stub_folder(f) / "exercises" / "gone.py").symlink_to(tmp_path / "nothing"),
+    }
+    for name, make in layouts.items():
+        folder = tmp_path / name
+        folder.mkdir()
+        make(folder)
+        before = bytes_read()
+        with pytest.raises(SubmissionRefused, match="is a symbolic link") as refused:
+            fingerprint(folder)
+        assert "never follows links" in str(refused.value) and bytes_read() - before < 64 * 1024, name
+        assert "is a symbolic link" in refusal(folder), name
+    # The submission's own path as a link: refused, named after the link, not its target.
+    (tmp_path / "alias").symlink_to(friend, target_is_directory=True)
+    (tmp_path / "alias.zip").symlink_to(tmp_path / "friend.zip")
+    for alias in ("alias", "alias.zip"):
+        submission = discover([tmp_path / alias])[0]
+        assert submission.kind == "link" and submission.id == "alias" and submission.path == tmp_path / alias
+        with pytest.raises(SubmissionRefused, match=f"the submission '{alias}' is a symbolic link"):
+            checked_path(submission.path)
+        assert f"the submission '{alias}' is a symbolic link" in refusal(tmp_path / alias)
+    # What grader.similarity reads (verify=False): a link inside is left out, never
+    # followed; a link on the way to the package is refused all the same.
+    with opened(discover([tmp_path / "module"])[0], verify=False) as folder:
+        assert folder == tmp_path / "module"
+    for name in ("package", "friend-link"):
+        assert "is a symbolic link" in refusal(tmp_path / name, verify=False), name
+
+
+@needs_sandbox
+def test_the_kernel_keyring_and_memfd_are_refused_in_every_sandbox(tmp_path):
+    """What a later submission under another uid could read: nothing is ever stored."""
+    package = tmp_path / "exercises"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "kernel.py").write_text(textwrap.dedent(KERNEL))
+    with Sandbox(package, slot=6) as first, Sandbox(package, slot=7) as second:
+        assert first.uid != second.uid
+        stored = first.call("exercises.kernel", "store", ["grader-hostile-direct"])
+        assert stored.status == "ok" and stored.value == {"add_key": 1, "keyctl": 1, "memfd": 1}, stored
+        found = second.call("exercises.kernel", "fetch", ["grader-hostile-direct"])
+        assert found.status == "ok" and found.value == {"search": -1, "keys": 0}, found
+
+
+KERNEL = '''
+import ctypes, errno, os
+
+def _libc():
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.syscall.restype = ctypes.c_long
+    return libc
+
+def store(description):
+    """errno of add_key, of keyctl (a read), and of memfd_create."""
+    libc = _libc()
+    data = b"def perfectly_inelastic_1d(m1, v1, m2, v2): ..."
+    out = {}
+    result = libc.syscall(248, b"user", description.encode(), data, ctypes.c_size_t(len(data)), ctypes.c_int(-4))
+    out["add_key"] = ctypes.get_errno() if result < 0 else 0
+    result = libc.syscall(250, ctypes.c_int(0), ctypes.c_int(-4), ctypes.c_int(0))  # KEYCTL_GET_KEYRING_ID
+    out["keyctl"] = ctypes.get_errno() if result < 0 else 0
+    try:
+        os.close(os.memfd_create("hog"))
+        out["memfd"] = 0
+    except OSError as exc:
+        out["memfd"] = exc.errno
+    return out
+
+def fetch(description):
+    libc = _libc()
+    found = libc.syscall(250, ctypes.c_int(10), ctypes.c_int(-4), b"user", description.encode(), ctypes.c_int(0))
+    try:
+        with open("/proc/keys") as handle:
+            keys = sum(1 for line in handle if description in line)
+    except OSError:
+        keys = 0
+    return {"search": found if found > 0 else -1, "keys": keys}
+'''

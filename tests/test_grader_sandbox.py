@@ -269,7 +269,7 @@ def test_a_fork_bomb_hits_the_process_limit(sandbox):
 def test_the_reference_solutions_cannot_be_read_or_imported(sandbox):
     result = sandbox.call("exercises.hostile", "read_file", [str(REPO / "solutions" / "shapes.py")])
     assert result.status == "error" and ("No such file" in result.message or "Permission" in result.message)
-    assert sandbox.call("exercises.hostile", "read_file", [str(REPO / "grader" / "spec" / "hidden.toml")]).status == "error"
+    assert sandbox.call("exercises.hostile", "read_file", [str(REPO / "grader" / "tests" / "hidden" / "test_grid.py")]).status == "error"
     assert sandbox.call("exercises.hostile", "import_reference").status == "error"
 
 

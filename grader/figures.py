@@ -81,8 +81,9 @@ def bounded(figure):
         if not isinstance(value, dict):
             return value
         value = dict(value)
-        if "points" in value:
-            value["points"] = limit(value["points"], "points")
+        for name in ("points", "depths"):
+            if name in value:
+                value[name] = limit(value[name], "points")
         return value
 
     def shape(value):

@@ -74,7 +74,7 @@ UID_LOCK_PARENTS = ("/run", "/var/run", "/var/lib", "/tmp")
 UID_LOCK_FOLDER = "grader-sandbox-uids"
 #: Statuses a worker may answer with.
 WORKER_STATUSES = ("ok", "not_implemented", "import_error", "missing", "error", "unreadable")
-RESPONSE_LIMIT = 64 * 1024 * 1024  # bytes of one JSON response
+RESPONSE_LIMIT = 16 * 1024 * 1024  # bytes of one JSON response (parsed, it takes about 15 times more)
 TEXT_LIMIT = 20_000  # characters of a worker's message or printed output kept per call
 STDERR_KEPT = 8_000  # characters of the worker's stderr kept for messages
 
@@ -571,18 +571,33 @@ class Sandbox:
         fd = self.process.stdin.fileno()
         os.set_blocking(fd, False)
         view = memoryview(data)
+        drained = 0
         with selectors.DefaultSelector() as selector:
             selector.register(fd, selectors.EVENT_WRITE)
+            # The answer channel is read meanwhile: a worker blocked writing lines into a
+            # full channel would otherwise never read the rest of this request.  Nothing
+            # it holds can answer a request not yet sent; a fresh worker's hello is kept.
+            selector.register(self._response_fd, selectors.EVENT_READ)
             while view:
                 remaining = deadline - time.perf_counter()
                 if remaining <= 0:
                     return False
-                if not selector.select(timeout=min(remaining, 0.5)):
-                    continue
-                try:
-                    view = view[os.write(fd, view):]
-                except BlockingIOError:
-                    continue
+                for key, _ in selector.select(timeout=min(remaining, 0.5)):
+                    if key.fd == self._response_fd:
+                        chunk = os.read(self._response_fd, 1 << 20)
+                        if not chunk:
+                            selector.unregister(self._response_fd)
+                            continue
+                        if self._worker_pid is None:
+                            self._buffer += chunk
+                        drained += len(chunk)
+                        if drained > RESPONSE_LIMIT:
+                            return False
+                        continue
+                    try:
+                        view = view[os.write(fd, view):]
+                    except BlockingIOError:
+                        continue
         return True
 
     @staticmethod

@@ -557,7 +557,9 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
             work = out_dir / WORK_NAME
             shutil.rmtree(work, ignore_errors=True)
             work.mkdir()
-            for stale in [*out_dir.glob(f"*/.{RESULTS_NAME}.*.tmp"), *out_dir.glob(f".{GRADEBOOK_NAME}.*.tmp")]:
+            written = (RESULTS_NAME, REPORT_NAME, FEEDBACK_NAME)
+            for stale in [*(p for name in written for p in out_dir.glob(f"*/.{name}.*.tmp")),
+                          *out_dir.glob(f".{GRADEBOOK_NAME}.*.tmp")]:
                 stale.unlink(missing_ok=True)  # left by a run killed while writing
             try:
                 # Workers start importing now, while this process loads the spec and

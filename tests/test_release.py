@@ -326,6 +326,41 @@ def test_student_grader_agrees_with_the_instructors(release, filled):
     assert statuses(results["instructor, filled"].stdout) == full
 
 
+CLASSIC_BUGS = ("restitution-sign", "grid-own-cell", "quadtree-drops-straddling", "flt-min", "one-point-manifold",
+                "separate-impulses")
+
+
+def test_student_grader_loses_exactly_the_expected_tests_on_classic_bugs(release, tmp_path):
+    """Classic bugs of the example class, one or more per exercise: the student edition's
+    check fails exactly the public tests each bug must fail, as the instructor's does."""
+    from grader.example_class import BUGGY_SAMPLES, build_buggy_sample
+    from grader.spec import load_spec
+
+    public = {t.name for t in load_spec() if t.public}
+    samples = [s for s in BUGGY_SAMPLES if s.name in CLASSIC_BUGS]
+    assert len(samples) == len(CLASSIC_BUGS)
+    student = release.student
+    runs = {}
+    for sample in samples:
+        folder = build_buggy_sample(sample, tmp_path)
+        runs[(sample.name, "student")] = ([PYTHON, "-S", "-c", STUDENT_GRADER, "check", "--package", str(folder)],
+                                          student, student_env(student))
+        runs[(sample.name, "instructor")] = ([PYTHON, "-m", "grader", "check", "--package", str(folder)], REPO,
+                                             student_env(REPO))
+
+    def run(item):
+        key, (command, cwd, env) = item
+        return key, subprocess.run(command, cwd=cwd, env=env, capture_output=True, text=True, timeout=900)
+
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        results = dict(pool.map(run, runs.items()))
+    for sample in samples:
+        mine, theirs = (statuses(results[(sample.name, side)].stdout) for side in ("student", "instructor"))
+        assert mine and mine == theirs, sample.name
+        failed = {name for name, label in mine.items() if label != "PASS"}
+        assert failed == sample.expected_failures & public, sample.name
+
+
 # A chapter notebook --------------------------------------------------------------------------------------
 def _text(output) -> str:
     if output.get("output_type") == "stream":

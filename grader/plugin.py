@@ -21,7 +21,8 @@ The ``student`` fixture is a :class:`~grader.student.StudentCode`: calls cross t
 sandboxed worker as JSON, nothing of a test module runs in the sandbox, and every
 expected value is computed here, in the trusted pytest process.  ``reference`` is the
 reference engine in a sandbox of its own (speed tests time both side by side);
-``metrics`` is a dict whose items are reported with the test (seconds, error).
+``metrics`` is a dict whose items are reported with the test (seconds, error); ``picture``
+attaches a picture of the case (:mod:`grader.figures`) that a failure shows.
 
 Each test ends as an :class:`~grader.outcome.Outcome`: passed; failed (an
 ``assert`` or :func:`grader.credit.fail`, with its share of right cases and picture);
@@ -35,6 +36,7 @@ Run directly, by an instructor::
 """
 from __future__ import annotations
 
+import json
 import time
 import traceback
 from dataclasses import dataclass, field
@@ -231,11 +233,15 @@ class GradedRun:
         report = (yield).get_result()
         if call.when == "call" or (call.when == "setup" and report.outcome != "passed"):
             outcome = outcome_of(call.excinfo, item)
+            if outcome.status == "failed" and outcome.figure is None and PICTURE_KEY in item.stash:
+                outcome.figure = bounded(item.stash[PICTURE_KEY])
             item.stash[OUTCOME_KEY] = outcome
             spec = item.stash.get(SPEC_KEY, None)
             if spec is not None:
                 score = TestResult(spec, outcome, 0.0).score
                 item.user_properties += [("status", outcome.status), ("score", score), ("points", spec.points)]
+                if outcome.figure is not None:  # the picture's data, for reports built from JUnit XML
+                    item.user_properties.append(("figure", json.dumps(outcome.figure)))
 
     def pytest_sessionfinish(self, session):
         self.close()
@@ -245,6 +251,7 @@ SPEC_KEY = pytest.StashKey[TestSpec]()
 OUTCOME_KEY = pytest.StashKey[Outcome]()
 START_KEY = pytest.StashKey[float]()
 METRICS_KEY = pytest.StashKey[dict]()
+PICTURE_KEY = pytest.StashKey[dict]()
 
 
 def _marker_arg(item, name: str, default=None):
@@ -370,6 +377,23 @@ def student(request) -> StudentCode:
 def reference(request) -> StudentCode:
     """The reference engine in a sandbox of its own (instructor's side only)."""
     return graded_run(request.config).reference()
+
+
+class Picture:
+    """A picture of the case a test is on (plain data of :mod:`grader.figures`); kept
+    with the test's outcome when it fails and the failure carries no picture itself."""
+
+    def __init__(self, node):
+        self.node = node
+
+    def attach(self, figure: dict) -> None:
+        self.node.stash[PICTURE_KEY] = figure
+
+
+@pytest.fixture
+def picture(request) -> Picture:
+    """``picture.attach(figure)``: the picture a failure of this test shows."""
+    return Picture(request.node)
 
 
 @pytest.fixture

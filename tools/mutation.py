@@ -46,14 +46,6 @@ REPO = Path(__file__).resolve().parent.parent
 SOLUTIONS = REPO / "solutions"
 EQUIVALENT_FILE = Path(__file__).resolve().parent / "mutation_equivalent.toml"
 BEGIN, END = "### BEGIN SOLUTION", "### END SOLUTION"
-#: The exercise each written function belongs to (module, or module:function prefix).
-EXERCISE_OF_MODULE = {
-    "response/momentum_1d.py": "momentum", "broadphase/uniform_grid.py": "grid",
-    "broadphase/quadtree.py": "quadtree", "narrowphase/projection.py": "sat",
-    "response/impulse.py": "impulse", "response/positional_correction.py": "impulse",
-}
-NARROW_PHASE = ("narrowphase/aabb_aabb.py", "narrowphase/circle_circle.py", "narrowphase/circle_polygon.py",
-                "narrowphase/polygon_polygon.py")
 KEPT_OPERATORS = re.compile(
     r"(ReplaceBinaryOperator_(Add|Sub|Mul|Div)_(Add|Sub|Mul|Div)$|ReplaceComparisonOperator_|"
     r"ReplaceUnaryOperator_|ReplaceAndWithOr|ReplaceOrWithAnd|ReplaceTrueWithFalse|ReplaceFalseWithTrue|"
@@ -61,13 +53,11 @@ KEPT_OPERATORS = re.compile(
 
 
 def exercise_of(module: str, function: str) -> str:
-    """The exercise a mutated function belongs to; the narrow-phase files hold both the
-    SAT overlap tests and contact generation (``collide_*``)."""
-    if module in EXERCISE_OF_MODULE:
-        return EXERCISE_OF_MODULE[module]
-    if module in NARROW_PHASE:
-        return "contacts" if function.split(".")[-1].startswith("collide") else "sat"
-    return "other"
+    """The exercise a mutated function belongs to: the generator's table, which also
+    names the ``grader check`` command in each stub (one table for both)."""
+    from tools.generate_exercises import exercise_of as table_exercise
+
+    return table_exercise(module, function) or table_exercise(module, function.split(".")[-1]) or "other"
 
 
 def solution_lines(path: Path) -> list[tuple[int, int]]:
@@ -285,7 +275,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--limit", type=int, default=None, help="grade only every k-th mutant so that about N run")
     parser.add_argument("--out", default="out/mutation")
+    parser.add_argument("--rescore", action="store_true",
+                        help="print the scores of DIR/mutation.json again (after editing the equivalent list)")
     args = parser.parse_args(argv)
+    if args.rescore:
+        data = json.loads((Path(args.out) / "mutation.json").read_text(encoding="utf-8"))
+        graded = [Mutant(**m) for m in data["mutants"]]
+        for mutant in graded:
+            mutant.exercise = exercise_of(mutant.module, mutant.function)
+        equivalent = equivalent_mutants()
+        print(format_table(scores(graded, equivalent)))
+        return 0
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     session = out / "session.sqlite"

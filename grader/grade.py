@@ -553,6 +553,8 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
     rows: dict[str, dict] = {}
     workers: list[Worker] = []
     try:
+        # Measured before the grading workers start importing, which would load the machine.
+        factor = slowdown() if calibrate else 1.0
         with _locked(out_dir):
             work = out_dir / WORK_NAME
             shutil.rmtree(work, ignore_errors=True)
@@ -620,7 +622,6 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
 
                     # Limits in wall-clock seconds, scaled by how loaded the machine is now
                     # (grader.calibration): a busy machine must not fail honest work.
-                    factor = slowdown() if calibrate else 1.0
                     if factor > 1.05:
                         warn(f"note: this machine runs {factor:.1f}x slower than an idle one now; time limits "
                              f"scaled to {per_test_seconds * factor:g} s per test and "

@@ -83,7 +83,10 @@ case "$command" in
         "$PY" -m tools.generate_exercises --check
         "$PY" -m tools.book check
         # --dist loadgroup: the book's tests share one build on one worker.
-        "$PY" -m pytest -n 2 --dist loadgroup --doctest-modules solutions tools tests "$@"
+        # COURSE_RELEASE_VENV=1: the student edition's set-up command is run into a fresh
+        # venv (tests/test_release.py; it downloads the pinned packages once, then pip's cache).
+        COURSE_RELEASE_VENV="${COURSE_RELEASE_VENV:-1}" \
+            "$PY" -m pytest -n 2 --dist loadgroup --doctest-modules solutions tools tests "$@"
         ;;
     *)
         echo "unknown command '$command': use main, test, setup or bench" >&2

@@ -24,8 +24,8 @@ the path without running their ``.pth`` files, as ``site`` would otherwise do, s
 student folder is all there is of the course.
 
 ``test_student_setup_in_fresh_venv`` runs the README's set-up command into a fresh
-virtualenv (it downloads the pinned packages: a few minutes); it is skipped unless
-``COURSE_RELEASE_VENV=1``.
+virtualenv (it downloads the pinned packages once, then reads pip's cache); it runs when
+``COURSE_RELEASE_VENV=1``, which ``bash run.sh test`` sets.
 """
 from __future__ import annotations
 
@@ -578,7 +578,7 @@ def test_student_setup_in_fresh_venv(release, tmp_path):
     result = subprocess.run([str(python), "-c", run], cwd=student, env=env, capture_output=True, text=True,
                             timeout=900)
     assert result.returncode == 0, result.stdout + result.stderr
-    assert "fallbacks" in result.stdout and "0/6 points" in result.stdout, result.stdout
+    assert "fallbacks" in result.stdout and re.search(r"momentum: 0/\d+ points", result.stdout), result.stdout
     result = subprocess.run(["bash", "run.sh", "submit"], cwd=student, env=env, capture_output=True, text=True,
                             timeout=600)
     assert result.returncode == 0, result.stdout + result.stderr

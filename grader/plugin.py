@@ -217,7 +217,7 @@ class GradedRun:
         if spec is None or outcome is None:
             return
         if self._student is not None:
-            outcome.output = capped(self._student.take_output(), 4000)
+            outcome.output = self._student.take_output()  # capped as it was kept
         result = TestResult(spec, outcome, time.perf_counter() - item.stash[START_KEY])
         self.results.append(result)
         if self.progress is not None:

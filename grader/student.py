@@ -38,26 +38,6 @@ def encode(value: Any) -> Any:
     return codec.encode_value(value)
 
 
-#: Characters of printed output quoted in a failed test's message.
-OUTPUT_SHOWN = 2000
-
-
-def shown_output(output: str, limit: int = OUTPUT_SHOWN) -> str:
-    """The start of what the student's code printed, saying how much was left out.
-
-    The worker already keeps only the start of a long output and ends it with
-    ``[... N more characters not shown]``; that count is added to what is cut here.
-    """
-    if len(output) <= limit:
-        return output
-    dropped = 0
-    head, marker, tail = output.rpartition("\n[... ")
-    if marker and tail.endswith(" more characters not shown]") and tail.split(" ", 1)[0].isdigit():
-        output, dropped = head, int(tail.split(" ", 1)[0])
-    dropped += max(0, len(output) - limit)
-    return output[:limit] + f"\n[... {dropped} more characters not shown]"
-
-
 class StudentCode:
     """The student's ``exercises`` package, reached through a sandboxed worker.
 

@@ -390,8 +390,11 @@ class Sandbox:
         # capability anywhere): a keyring and namespaces of its own.  It is unprivileged, so
         # it binds the first one's root as it is (read-only mounts stay read-only), and it
         # loads the seccomp filter last, which then refuses any further namespace.
+        # Its own process namespace too: the worker and what it starts see only their
+        # own init, which ignores their signals, so they cannot stop this bubblewrap.
         user_namespace = ["bwrap", "--unshare-user", "--uid", str(self.uid), "--gid", str(self.uid),
-                          "--bind", "/", "/", "--chdir", SANDBOX_MOUNT, "--die-with-parent"]
+                          "--unshare-pid", "--bind", "/", "/", "--chdir", SANDBOX_MOUNT,
+                          "--die-with-parent"]
         if self._seccomp_fd is not None:
             user_namespace += ["--seccomp", str(self._seccomp_fd)]
         return cmd + ["--", *drop, *user_namespace, "--", *python]
@@ -694,10 +697,14 @@ class Sandbox:
                  if int(fields.get("Uid", "-1").split()[0]) == self.uid]
         spared: set[int] = set()
         if worker_pid is not None:
+            parent_of = {pid: int(fields.get("PPid", "0").split()[0] or 0) for pid, fields in table}
             for pid, fields in table:
                 if fields.get("NSpid", "").split()[-1:] == [str(worker_pid)]:
-                    # The worker, and its parent: the bubblewrap holding its user namespace.
-                    spared |= {pid, int(fields.get("PPid", "0").split()[0] or 0)}
+                    # The worker and its ancestors of the sandbox's user: the bubblewrap
+                    # holding its user and process namespaces, and that namespace's init.
+                    while pid in parent_of and pid not in spared:
+                        spared.add(pid)
+                        pid = parent_of[pid]
         for pid, fields in table:
             if pid in spared:
                 continue

@@ -40,6 +40,13 @@ BODY_FIELDS = ("mass", "angle", "angular_velocity", "restitution", "friction",
 SHAPE_KINDS = ("Circle", "AABB", "OBB", "ConvexPolygon")
 #: Deepest nesting of lists and dicts accepted in either direction.
 MAX_DEPTH = 64
+#: Contact feature ids (``Contact.feature_ids``, one hashable per point): each id is at
+#: most this many tuples deep (``("A", 2, 0, 1)`` is 1 deep, an int or a str 0),
+MAX_FEATURE_ID_DEPTH = 4
+#: ... holds at most this many ints, floats, bools, Nones and strings in all,
+MAX_FEATURE_ID_ITEMS = 16
+#: ... and strings of at most this many characters.
+MAX_FEATURE_ID_TEXT = 64
 
 
 class NotPlainData(TypeError):
@@ -144,7 +151,11 @@ def decode_body(data: dict, shapes_module, body_module):
 
 
 def encode_contact(contact) -> dict | None:
-    """A contact (anything with normal, depth, points) as plain numbers; None stays None."""
+    """A contact (anything with normal, depth, points) as plain numbers; None stays None.
+
+    ``depths`` and ``feature_ids`` are sent when the contact has them (not None); the
+    ids as :func:`encode_feature_ids` writes them.
+    """
     if contact is None:
         return None
     points = [floats(p) for p in _rows(contact.points)]
@@ -152,13 +163,116 @@ def encode_contact(contact) -> dict | None:
     depths = getattr(contact, "depths", None)
     if depths is not None:
         out["depths"] = floats(depths)
+    feature_ids = getattr(contact, "feature_ids", None)
+    if feature_ids is not None:
+        out["feature_ids"] = encode_feature_ids(feature_ids, len(points))
     return out
 
 
 def decode_contact(data: dict, contact_module):
-    """Rebuild a tagged contact with ``contact_module.Contact``."""
+    """Rebuild a tagged contact with ``contact_module.Contact`` (feature ids as tuples)."""
     fields = {k: v for k, v in data.items() if k != CONTACT_TAG}
+    if "feature_ids" in fields:
+        fields["feature_ids"] = decode_feature_ids(fields["feature_ids"])
     return contact_module.Contact(**fields)
+
+
+# Feature ids ---------------------------------------------------------------------------------
+# A contact's feature ids travel as a JSON list, one entry per contact point; an entry is
+# an id written as JSON: an int, float, bool, None or string as itself, a tuple as a
+# JSON list of its entries (``("A", 2, 0, 1)`` -> ``["A", 2, 0, 1]``).  A list inside
+# the ids always stands for a tuple, never for a list: an id is a dict key (hashable),
+# so no id is a list, and :func:`decode_feature_ids` gives every one back as a tuple.
+# Either side refuses anything else (lists, sets, arrays, objects in an id) and ids
+# larger than MAX_FEATURE_ID_DEPTH / _ITEMS / _TEXT, and a count other than the number
+# of points.
+def encode_feature_ids(ids, count: int) -> list:
+    """``Contact.feature_ids`` (a tuple or list of ``count`` hashable ids) as JSON data."""
+    if isinstance(ids, tuple):
+        size = tuple.__len__(ids)
+    elif isinstance(ids, list):
+        size = list.__len__(ids)
+    elif _is_array(ids):
+        ids = items(ids)    # its own tolist(), never a subclass's size or __len__
+        size = len(ids)
+    else:
+        raise NotPlainData(f"feature_ids must be a tuple of ids, one per contact point, got a {type(ids).__name__}")
+    if size != count:
+        raise NotPlainData(f"a contact with {count} point(s) has {size} feature id(s): it needs one per point")
+    return [_encode_feature_id(v, 0, [0]) for v in items(ids)]
+
+
+def _encode_feature_id(value, depth: int, used: list):
+    """One id as JSON (read as :func:`real` and :func:`items` read values); ``used[0]``
+    counts its numbers and strings."""
+    if isinstance(value, tuple):
+        if depth >= MAX_FEATURE_ID_DEPTH:
+            raise NotPlainData(f"a feature id is nested more than {MAX_FEATURE_ID_DEPTH} tuples deep")
+        if tuple.__len__(value) > MAX_FEATURE_ID_ITEMS:
+            raise NotPlainData(f"a feature id holds more than {MAX_FEATURE_ID_ITEMS} values")
+        return [_encode_feature_id(v, depth + 1, used) for v in items(value)]
+    used[0] += 1
+    if used[0] > MAX_FEATURE_ID_ITEMS:
+        raise NotPlainData(f"a feature id holds more than {MAX_FEATURE_ID_ITEMS} values")
+    if value is None:
+        return None
+    if isinstance(value, str):
+        if str.__len__(value) > MAX_FEATURE_ID_TEXT:
+            raise NotPlainData(f"a feature id holds a string longer than {MAX_FEATURE_ID_TEXT} characters")
+        return value if type(value) is str else str.__str__(value)
+    np = _numpy()
+    if isinstance(value, (int, float)) or (np is not None and isinstance(value, np.generic)
+                                           and not isinstance(value, np.str_)):
+        return real(value)
+    raise NotPlainData(f"a feature id must be an int, a str or a tuple of them (hashable), not a "
+                       f"{type(value).__name__}")
+
+
+def check_feature_ids(data, count: int) -> None:
+    """NotPlainData unless ``data`` is None or well-formed ids (JSON) for ``count`` points."""
+    if data is None:
+        return
+    if type(data) is not list:
+        raise NotPlainData(f"{CONTACT_TAG} value: feature_ids must be a list, one id per point")
+    if len(data) != count:
+        raise NotPlainData(f"{CONTACT_TAG} value: {count} point(s) but {len(data)} feature id(s)")
+    for value in data:
+        _check_feature_id(value, 0, [0])
+
+
+def _check_feature_id(value, depth: int, used: list) -> None:
+    kind = type(value)
+    if kind is list:
+        if depth >= MAX_FEATURE_ID_DEPTH:
+            raise NotPlainData(f"a feature id is nested more than {MAX_FEATURE_ID_DEPTH} tuples deep")
+        if len(value) > MAX_FEATURE_ID_ITEMS:
+            raise NotPlainData(f"a feature id holds more than {MAX_FEATURE_ID_ITEMS} values")
+        for v in value:
+            _check_feature_id(v, depth + 1, used)
+        return
+    used[0] += 1
+    if used[0] > MAX_FEATURE_ID_ITEMS:
+        raise NotPlainData(f"a feature id holds more than {MAX_FEATURE_ID_ITEMS} values")
+    if kind is str:
+        if len(value) > MAX_FEATURE_ID_TEXT:
+            raise NotPlainData(f"a feature id holds a string longer than {MAX_FEATURE_ID_TEXT} characters")
+    elif value is not None and kind not in (bool, int, float):
+        raise NotPlainData(f"a feature id must be an int, a str or a tuple of them, not a {kind.__name__}")
+
+
+def decode_feature_ids(data) -> tuple | None:
+    """Feature ids as JSON (or already decoded) back as a tuple of hashable ids: every
+    list (or tuple) becomes a tuple.  Call :func:`check_feature_ids` first on data not
+    yet checked by :func:`plain_data`."""
+    if data is None:
+        return None
+    return tuple(_decode_feature_id(v) for v in data)
+
+
+def _decode_feature_id(value):
+    if isinstance(value, (list, tuple)):
+        return tuple(_decode_feature_id(v) for v in value)
+    return value
 
 
 # Any return value ----------------------------------------------------------------------------
@@ -279,6 +393,8 @@ def _check_tagged(tag: str, value: dict, depth: int) -> None:
             raise NotPlainData(f"{tag} value: depth must be a number")
         if "depths" in value:
             numbers("depths", value["depths"])
+        if "feature_ids" in value:
+            check_feature_ids(value["feature_ids"], len(value["points"]))
     elif tag == BODY_TAG:
         shape = value.get("shape")
         if type(shape) is not dict or SHAPE_TAG not in shape:

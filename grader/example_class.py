@@ -909,6 +909,8 @@ NORMAL_NOT_FLIPPED = BuggySample(
         # planes cut off B's deepest vertex, and the pair A's manifold misses entirely.
         "contacts.reference_face_rules",
         "contacts.reference_face_edge_cases",
+        # The feature-id pair whose reference face is B's (the steep box): its normal is wrong.
+        "contacts.feature_ids",
         # Not failed: the face-to-face tests, whose reference face is A's.
     }),
 )
@@ -949,6 +951,8 @@ AABB_DEPTH_MAX = BuggySample(
         # Every overlapping pair (and pairs apart on one axis but deep on another).
         "contacts.aabb_contacts",
         "contacts.aabb_aabb",
+        # The hand-worked feature-id pairs: the deepest face, so normal, points and ids are wrong.
+        "contacts.feature_ids",
     }),
 )
 
@@ -995,6 +999,8 @@ ONE_POINT_MANIFOLD = BuggySample(
         "contacts.reference_face_manifold",
         "contacts.reference_face_rules",
         "contacts.reference_face_edge_cases",
+        # The feature-id pairs of polygons face to face get one point (and one id) instead of two.
+        "contacts.feature_ids",
     }),
 )
 
@@ -1046,6 +1052,8 @@ CONTACT_POINT_ON_POLYGON = BuggySample(
         "contacts.centre_inside",
         "contacts.random_against_reference",
         "contacts.degenerate_shapes",
+        # The hand-worked circle-and-box pairs of the feature-id test: their points are wrong.
+        "contacts.feature_ids",
     }),
 )
 

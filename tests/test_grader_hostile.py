@@ -696,6 +696,94 @@ def test_the_parent_accepts_only_well_formed_plain_data():
             codec.plain_data(bad)
 
 
+def plain_contact(points, feature_ids="absent") -> dict:
+    data = {codec.CONTACT_TAG: True, "normal": [0.0, 1.0], "depth": 0.5, "points": points}
+    if feature_ids != "absent":
+        data["feature_ids"] = feature_ids
+    return data
+
+
+def test_contact_feature_ids_cross_as_json_and_come_back_as_tuples():
+    import solutions.contact
+
+    points = [(0.0, 0.75), (1.0, 0.75)]
+    for ids in ((("A", 2, 0, 0), ("A", 2, 0, 1)), (0, 1), ("left", "right"), ((("face", 1), 2), (None, True)),
+                ((), (1.5, ("x", ("y", 3))))):
+        contact = solutions.contact.Contact((0.0, 1.0), 0.5, points, feature_ids=ids)
+        data = codec.encode_value(contact)
+        back = codec.decode_contact(codec.plain_data(json.loads(json.dumps(data))), solutions.contact)
+        assert back.feature_ids == ids and type(back.feature_ids) is tuple
+        assert [type(v) for v in back.feature_ids] == [type(v) for v in ids]
+    # A tuple travels as a JSON list; a string or an int as itself: ("a",) and "a" stay apart.
+    one = codec.encode_contact(solutions.contact.Contact((0.0, 1.0), 0.5, [(0.0, 0.0)], feature_ids=(("a",),)))
+    assert one["feature_ids"] == [["a"]]
+    assert codec.decode_feature_ids(one["feature_ids"]) == (("a",),) != codec.decode_feature_ids(["a"])
+    # Without ids (None) the contact is sent as before: no key, and None comes back.
+    bare = codec.encode_contact(solutions.contact.Contact((0.0, 1.0), 0.5, points))
+    assert "feature_ids" not in bare and codec.decode_contact(bare, solutions.contact).feature_ids is None
+
+
+class OwnContact(SimpleNamespace):
+    """A student's own contact class (the codec knows contacts by their class name)."""
+
+
+OwnContact.__name__ = "Contact"
+
+
+def test_feature_ids_are_read_without_calling_student_methods():
+    import collections
+
+    import solutions.contact
+
+    Named = collections.namedtuple("Named", "ref face")
+    ids = (Named(LyingStr("A"), LyingInt(2)), (np.int64(3), np.str_("v"), np.float32(0.5), np.bool_(True)))
+    contact = solutions.contact.Contact((0.0, 1.0), 0.5, [(0.0, 0.0), (1.0, 0.0)], feature_ids=ids)
+    assert codec.encode_contact(contact)["feature_ids"] == [["A", 2], [3, "v", 0.5, True]]
+    # Contact objects of the student's own: the same rules, the count checked by the codec.
+    for bad, words in ((("a", ["list"]), "not a list"), (("a", {1, 2}), "not a set"),
+                       (("a", object()), "not a object"), (("a", b"bytes"), "not a bytes"),
+                       (("a", np.array([1, 2])), "not a ndarray"), ({"a": 1, "b": 2}, "got a dict"),
+                       (("a",), "2 point\\(s\\) has 1 feature id"), (("a", "b", "c"), "has 3 feature id")):
+        contact = OwnContact(normal=(0.0, 1.0), depth=0.5, points=[(0.0, 0.0), (1.0, 0.0)], feature_ids=bad)
+        with pytest.raises(codec.NotPlainData, match=words):
+            codec.encode_value(contact)
+
+
+def test_hostile_feature_ids_are_refused_on_both_sides():
+    huge_text = "x" * (codec.MAX_FEATURE_ID_TEXT + 1)
+    wide = tuple(range(codec.MAX_FEATURE_ID_ITEMS + 1))
+    many = tuple((k, (k, (k, k))) for k in range(codec.MAX_FEATURE_ID_ITEMS))   # 4 values each: 64 in all
+    deep = "v"
+    for _ in range(codec.MAX_FEATURE_ID_DEPTH + 1):
+        deep = (deep,)
+    very_deep = "v"
+    for _ in range(100_000):   # deeper than the recursion limit: refused before it is walked
+        very_deep = (very_deep,)
+    for bad, words in ((huge_text, "longer than"), (wide, "more than"), (many, "more than"), (deep, "deep"),
+                       (very_deep, "deep"), ("x" * 10**7, "longer than"), (tuple(range(10**6)), "more than")):
+        fake = SimpleNamespace(normal=(0.0, 1.0), depth=0.5, points=[(0.0, 0.0)], feature_ids=(bad,))
+        with pytest.raises(codec.NotPlainData, match=words):
+            codec.encode_contact(fake)
+        # The same id forged as JSON by a worker that skipped the encoder.
+        forged = codec.decode_feature_ids([bad]) if bad is not very_deep else None
+        if forged is not None:
+            data = json.loads(json.dumps(plain_contact([[0.0, 0.0]], [list(forged[0]) if isinstance(forged[0], tuple)
+                                                                      else forged[0]])))
+            with pytest.raises(codec.NotPlainData, match=words):
+                codec.plain_data(data)
+    # Forged JSON the encoder never writes: objects in an id, the wrong count, not a list.
+    for ids, words in (([{"a": 1}], "not a dict"), ([[{"$shape": "Circle"}]], "not a dict"), (["a", "b"], "1 point"),
+                       ([], "1 point"), ("a", "must be a list"), ({"0": "a"}, "must be a list"),
+                       ([[[[[["a"]]]]]], "deep")):
+        with pytest.raises(codec.NotPlainData, match=words):
+            codec.plain_data(plain_contact([[0.0, 0.0]], ids))
+    # Well-formed ids pass (JSON null for "no ids" too), and a lone surrogate is cleaned.
+    assert codec.plain_data(plain_contact([[0.0, 0.0]], [["A", 1, 2.5, True, None]]))["feature_ids"] == [
+        ["A", 1, 2.5, True, None]]
+    assert codec.plain_data(plain_contact([[0.0, 0.0]], None))["feature_ids"] is None
+    assert codec.plain_data(plain_contact([[0.0, 0.0]], ["x\udcff"]))["feature_ids"] == ["x?"]
+
+
 def test_results_with_lone_surrogates_are_written_as_valid_utf8(tmp_path):
     path = write_results({"score": 0, "tests": [], "output": "caf\udce9"}, tmp_path / "results.json")
     assert json.loads(path.read_bytes().decode("utf-8"))["output"] == "caf\udce9"

@@ -3,10 +3,13 @@
 Expected contacts are plain dicts (:func:`.plain.contact`, from pymunk or literals) or
 None.  Every returned field is compared: the normal (finite, unit length, within the
 tolerance of the expected one, with a word when it points the wrong way), the depth,
-the number of points and each point.  A NaN or infinite value is never "within the
-tolerance": every comparison is written so that NaN fails (``not |x - y| <= tol``)
-after an explicit finiteness test.  Each function returns None for a right answer,
-else a sentence saying what was expected and what came back.
+the number of points and each point; each point's depth and feature id when the
+expected contact lists them (:func:`with_feature_ids`: pymunk gives no feature ids, so
+only contacts worked out by hand, and the reference's on the hidden side, have them).
+A NaN or infinite value is never "within the tolerance": every comparison is written
+so that NaN fails (``not |x - y| <= tol``) after an explicit finiteness test.  Each
+function returns None for a right answer, else a sentence saying what was expected and
+what came back.
 """
 from __future__ import annotations
 
@@ -14,7 +17,7 @@ import math
 
 import numpy as np
 
-from ..codec import CONTACT_TAG, SHAPE_TAG
+from ..codec import CONTACT_TAG, SHAPE_TAG, NotPlainData, check_feature_ids, decode_feature_ids
 from ..compare import as_number, as_vector, boolean, show
 
 #: Contacts match within this (m): the oracle and a right answer compute the same
@@ -57,8 +60,42 @@ def call_text(function: str, *args) -> str:
 def contact_text(contact: dict | None) -> str:
     if contact is None:
         return "None"
+    ids = contact.get("feature_ids")
     return (f"Contact(normal={show([float(v) for v in contact['normal']])}, depth={number_text(contact['depth'])}, "
-            f"points={show([[float(x) for x in p] for p in contact['points']])})")
+            f"points={show([[float(x) for x in p] for p in contact['points']])}"
+            + ("" if ids is None else f", feature_ids={ids_text(ids)}") + ")")
+
+
+def with_feature_ids(contact: dict, feature_ids) -> dict:
+    """An expected plain contact that also names each point's feature id (in the order
+    of its points): ids are compared exactly, each with the one of its point."""
+    if len(feature_ids) != len(contact["points"]):
+        raise ValueError("one feature id per expected contact point (a problem of the test)")
+    return dict(contact, feature_ids=[_plain_id(v) for v in feature_ids])
+
+
+def without_feature_ids(contact: dict | None) -> dict | None:
+    """The contact without its feature ids (they are then not compared)."""
+    if not isinstance(contact, dict) or "feature_ids" not in contact:
+        return contact
+    return {k: v for k, v in contact.items() if k != "feature_ids"}
+
+
+def _plain_id(value):
+    return [_plain_id(v) for v in value] if isinstance(value, (list, tuple)) else value
+
+
+def id_text(value) -> str:
+    """A feature id as Python writes it: tuples in parentheses, strings quoted."""
+    if isinstance(value, (list, tuple)):
+        inner = ", ".join(id_text(v) for v in value)
+        return f"({inner},)" if len(value) == 1 else f"({inner})"
+    return repr(value)
+
+
+def ids_text(ids) -> str:
+    return "(" + ", ".join(id_text(v) for v in list(ids)[:8]) + (", ..." if len(ids) > 8 else "") + (
+        ",)" if len(ids) == 1 else ")")
 
 
 def boolean_problem(got, want: bool) -> str | None:
@@ -125,7 +162,7 @@ def contact_problem(got, want: dict | None, atol: float = CONTACT_ATOL) -> str |
             return (f"contact points: expected {show([q.tolist() for q in want_points])} (each the midpoint "
                     f"between the two surfaces), got {show(rows)}")
         matched.append(remaining.pop(k))
-    return _depths_problem(got, want, points, matched, atol)
+    return _depths_problem(got, want, points, matched, atol) or _feature_ids_problem(got, want, points, matched)
 
 
 def _depths_problem(got: dict, want: dict, points: list, matched: list, atol: float) -> str | None:
@@ -144,6 +181,28 @@ def _depths_problem(got: dict, want: dict, points: list, matched: list, atol: fl
     return None
 
 
+def _feature_ids_problem(got: dict, want: dict, points: list, matched: list) -> str | None:
+    """Each point's feature id, when the expected contact lists them: equal as dict keys
+    (what warm starting matches them by), tuples however they were sent."""
+    if want.get("feature_ids") is None:
+        return None
+    want_ids = decode_feature_ids(want["feature_ids"])
+    data = got.get("feature_ids")
+    if data is None:
+        return (f"feature_ids: expected {ids_text(want_ids)} (one id per contact point, naming the features that "
+                f"touch there, as the docstring says), got None")
+    try:
+        check_feature_ids(data, len(points))
+    except NotPlainData:
+        return f"feature_ids must hold one id (an int, a str or a tuple of them) per contact point, got {show(data)}"
+    got_ids = decode_feature_ids(data)
+    for point, feature, j in zip(points, got_ids, matched):
+        if not feature == want_ids[j]:
+            return (f"the feature id of the contact point {show(point.tolist())}: expected {id_text(want_ids[j])}, "
+                    f"got {id_text(feature)} (feature_ids = {ids_text(got_ids)})")
+    return None
+
+
 def pair_figure(a: dict, b: dict, title: str, want: dict | None = None, got=None) -> dict:
     """Plain data for a picture of two shapes and the expected and returned contacts
     (see :mod:`grader.figures`, kind "shapes")."""
@@ -151,5 +210,5 @@ def pair_figure(a: dict, b: dict, title: str, want: dict | None = None, got=None
     if want is not None:
         figure["expected"] = {k: want[k] for k in (CONTACT_TAG, "normal", "depth", "points")}
     if isinstance(got, dict) and CONTACT_TAG in got:
-        figure["got"] = got
+        figure["got"] = without_feature_ids(got)   # not drawn
     return figure

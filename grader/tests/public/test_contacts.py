@@ -5,7 +5,9 @@ normal, depth (``-distance``) and points (the midpoint of its two surface points
 the course's; and, for shapes built to touch exactly or small cases worked out by hand,
 from literals (touching counts as colliding, with depth 0).  Every returned field is
 compared: the normal (unit, finite, A to B), the depth, the number of points and each
-point (:func:`grader.oracles.narrowphase_answers.contact_problem`).
+point (:func:`grader.oracles.narrowphase_answers.contact_problem`), and each point's
+feature id where the docstrings say what it is: pymunk gives none, so the feature ids
+are tested on pairs worked out by hand (``test_feature_ids``).
 
 Left out of the random batches, because pymunk does not follow the course's rule there
 or the answer is free: pairs within 1e-7 m of touching by rounding only, polygon pairs
@@ -33,7 +35,8 @@ from grader.oracles import narrowphase_cases as cases
 from grader.oracles import plain
 from grader.oracles import random_cases as rc
 from grader.oracles.brute_sat import contact_is_defined
-from grader.oracles.narrowphase_answers import call_text, contact_problem, contact_text, pair_figure
+from grader.oracles.narrowphase_answers import (call_text, contact_problem, contact_text, pair_figure,
+                                                with_feature_ids)
 from grader.oracles.pymunk_geometry import definite_overlap, pymunk_contact
 
 AABBS = "narrowphase.aabb_aabb"
@@ -489,6 +492,140 @@ def test_reference_face_manifold(student):
                                        f"ref_normal={show(list(case[0][1]))}, ref_face={case[0][2]}, "
                                        f"inc_vertices={show([list(v) for v in case[0][3]])}, (its normals and faces), "
                                        f"ref_name={case[0][4]!r}, scale={show(case[0][5])})"))
+
+
+# Feature ids, worked out by hand ------------------------------------------------------------------
+#: A 2 x 1 box; its vertices (solutions.shapes numbering, CCW) 0 = (0, 0), 1 = (2, 0), 2 = (2, 1),
+#: 3 = (0, 1); face k runs from vertex k to k + 1: 0 faces -y, 1 +x, 2 +y, 3 -x.
+BOX = plain.aabb((0, 0), (2, 1))
+
+
+def feature_contact(normal, depth: float, points, ids) -> dict:
+    """An expected contact whose points come with their feature ids, in the same order."""
+    return with_feature_ids(plain.contact(normal, depth, points), ids)
+
+
+def any_of(*wants: dict):
+    """Checker for a contact the docstring leaves to one of a few choices: any of
+    ``wants`` (feature ids included) is right."""
+    def problem(got):
+        problems = [contact_problem(got, want) for want in wants]
+        if any(p is None for p in problems):
+            return None
+        return (f"{problems[0]} (the docstring allows any of these contacts: "
+                f"{'; '.join(contact_text(want) for want in wants)})")
+
+    return problem
+
+
+#: collide_aabb_aabb(A, B) with A = BOX, one case per reference face of A: the ids are
+#: collide_polygon_polygon's ("A", reference face, incident face, k): B's incident face is
+#: the one opposite the reference face (face + 2), from B's vertex j to j + 1, and k is the
+#: vertex of that face the point comes from, either the vertex itself or the cut of A's side
+#: plane that replaced it.  (Corners touching are left out: there collide_aabb_aabb keeps
+#: the id of the first end, which is not what collide_polygon_polygon gives.)
+AABB_IDS = [
+    # Docstring example, B = [1, 3] x [0.5, 2]: face 2 (penetration 1 - 0.5); incident face
+    # 0 of B, from its vertex 0 (1, 0.5), kept, to vertex 1 (3, 0.5), cut at x = 2.
+    (plain.aabb((1, 0.5), (3, 2)),
+     feature_contact((0, 1), 0.5, [(1, 0.75), (2, 0.75)], [("A", 2, 0, 0), ("A", 2, 0, 1)])),
+    # B = [-1, 1] x [-1, 0.25] below: face 0 (penetration 0.25 - 0), incident face 2 of B from
+    # its vertex 2 (1, 0.25), kept, to vertex 3 (-1, 0.25), cut at x = 0; y = 0.125.
+    (plain.aabb((-1, -1), (1, 0.25)),
+     feature_contact((0, -1), 0.25, [(1, 0.125), (0, 0.125)], [("A", 0, 2, 2), ("A", 0, 2, 3)])),
+    # B = [1.75, 3] x [0.5, 2] on the right: face 1 (2 - 1.75), incident face 3 of B from its
+    # vertex 3 (1.75, 2), cut at y = 1, to vertex 0 (1.75, 0.5), kept; x = 1.875.
+    (plain.aabb((1.75, 0.5), (3, 2)),
+     feature_contact((1, 0), 0.25, [(1.875, 1), (1.875, 0.5)], [("A", 1, 3, 3), ("A", 1, 3, 0)])),
+    # B = [-1, 0.25] x [-0.5, 0.5] on the left: face 3 (0.25 - 0), incident face 1 of B from
+    # its vertex 1 (0.25, -0.5), cut at y = 0, to vertex 2 (0.25, 0.5), kept; x = 0.125.
+    (plain.aabb((-1, -0.5), (0.25, 0.5)),
+     feature_contact((-1, 0), 0.25, [(0.125, 0), (0.125, 0.5)], [("A", 3, 1, 1), ("A", 3, 1, 2)])),
+    # B = [-1, 3] x [0.75, 2], wider than A: face 2 (1 - 0.75), both ends of B's face 0 cut,
+    # at x = 0 (vertex 0's) and x = 2 (vertex 1's); y = 0.875.
+    (plain.aabb((-1, 0.75), (3, 2)),
+     feature_contact((0, 1), 0.25, [(0, 0.875), (2, 0.875)], [("A", 2, 0, 0), ("A", 2, 0, 1)])),
+]
+
+#: collide_circle_polygon(circle, polygon): ("face", i) when the closest point q lies inside
+#: face i or the centre is inside (the face it leaves through), ("vertex", k) when q is
+#: vertex k.  The normal points from the circle to the polygon.
+CIRCLE_POLYGON_IDS = [
+    # Above the top face: s_2 = 0.4, q = (1.5, 1) inside face 2: depth 0.5 - 0.4, the point
+    # halfway between q and (1.5, 1.4 - 0.5).
+    (plain.circle((1.5, 1.4), 0.5), BOX, feature_contact((0, -1), 0.1, [(1.5, 0.95)], [("face", 2)])),
+    # Left of face 3 (from (0, 1) down to (0, 0)): q = (0, 0.25), depth 0.5 - 0.3, the point
+    # halfway between q and (-0.3 + 0.5, 0.25).
+    (plain.circle((-0.3, 0.25), 0.5), BOX, feature_contact((1, 0), 0.2, [(0.1, 0.25)], [("face", 3)])),
+    # Off vertex 2 = (2, 1), 0.5 m away along (0.6, 0.8): face 1 ends there, face 2 starts
+    # there; depth 0.6 - 0.5, the point halfway between (2, 1) and (2.3, 1.4) - 0.6 (0.6, 0.8).
+    (plain.circle((2.3, 1.4), 0.6), BOX, feature_contact((-0.6, -0.8), 0.1, [(1.97, 0.96)], [("vertex", 2)])),
+    # Off vertex 0 = (0, 0), 0.5 m away along (-0.6, -0.8): face 0 starts there, face 3 ends
+    # there; the point halfway between (0, 0) and (-0.3, -0.4) + 0.6 (0.6, 0.8).
+    (plain.circle((-0.3, -0.4), 0.6), BOX, feature_contact((0.6, 0.8), 0.1, [(0.03, 0.04)], [("vertex", 0)])),
+    # Centre inside, 0.8 below the top face (s = -0.8, the largest): it leaves through face 2.
+    (plain.circle((0.1, 0.2), 0.3), plain.obb((0, 0), (1, 1), 0.0),
+     feature_contact((0, -1), 1.1, [(0.1, 0.45)], [("face", 2)])),
+    # Centre on the top face's line (s_2 = 0, the others < 0): the deep case, face 2, depth
+    # 0.25; the point halfway between the centre (0.5, 1) and (0.5, 1 - 0.25).
+    (plain.circle((0.5, 1), 0.25), BOX, feature_contact((0, -1), 0.25, [(0.5, 0.875)], [("face", 2)])),
+    # Centre exactly on the corner (2, 1): s_1 = s_2 = 0, the deep case; it leaves through
+    # face 1 or face 2 (a tie the docstring does not settle), never "vertex": depth 0.25, the
+    # point halfway between (2, 1) and (2, 1) - 0.25 n.
+    (plain.circle((2, 1), 0.25), BOX,
+     any_of(feature_contact((-1, 0), 0.25, [(1.875, 1)], [("face", 1)]),
+            feature_contact((0, -1), 0.25, [(2, 0.875)], [("face", 2)]))),
+    # A box of zero width, the segment from (0, -1) to (0, 1): vertices 0 and 1 are both at
+    # (0, -1), the closest point to the centre (0, -1.5); depth 0.6 - 0.5, the point halfway
+    # between (0, -1) and (0, -0.9).  Either vertex's id is right.
+    (plain.circle((0, -1.5), 0.6), plain.obb((0, 0), (0, 1), 0.0),
+     any_of(feature_contact((0, 1), 0.1, [(0, -0.95)], [("vertex", 0)]),
+            feature_contact((0, 1), 0.1, [(0, -0.95)], [("vertex", 1)]))),
+]
+
+
+def polygon_ids_cases() -> list[tuple]:
+    """(A, B, expected contact) for collide_polygon_polygon: ids (ref, face, incident face, k)."""
+    out = [
+        # FACE_FACE's first pair: A's top face (2) and B's bottom face (0) are tied (-0.05):
+        # A keeps the reference role; B's face 0 runs from its vertex 0 (-0.2, 0.45) to 1
+        # (0.8, 0.45), both inside A's side planes x = -1, 1.
+        (plain.obb((0, 0), (1, 0.5), 0.0), plain.obb((0.3, 0.95), (0.5, 0.5), 0.0),
+         feature_contact((0, 1), 0.05, [(-0.2, 0.475), (0.8, 0.475)], [("A", 2, 0, 0), ("A", 2, 0, 1)])),
+        # FACE_FACE's last pair: A's bottom face (0) and B's top face (2) tied (-0.1), A keeps
+        # it; B's face 2 from its vertex 2 (4, -0.2) to 3 (-2, -0.2), both cut by A's side
+        # planes x = 0.5 and x = -0.5.
+        (plain.polygon([(-0.5, -0.3), (0.5, -0.3), (0.5, 0.7), (-0.5, 0.7)]), plain.obb((1, -1), (3, 0.8), 0.0),
+         feature_contact((0, -1), 0.1, [(0.5, -0.25), (-0.5, -0.25)], [("A", 0, 2, 2), ("A", 0, 2, 3)])),
+    ]
+    # reference_face_cases' steep pair: B's bottom face (0) is the reference ("B"); A's
+    # incident face is its top face 2, from its vertex 2 (1, 0) to 3 (-1, 0), both kept.
+    # Seen from the steep box (A), the same faces with "A".
+    c, s = 399 / 401, 40 / 401
+    p = np.array([-1.04, -0.5])
+    along, up = np.array([c, s]), np.array([-s, c])
+    steep = plain.polygon([p, p + 3 * along, p + 3 * along + 2 * up, p + 2 * up])
+    ground = plain.aabb((-1, -2), (1, 0))
+    n_b = np.array([s, -c])
+    corners = (np.array([1.0, 0.0]), np.array([-1.0, 0.0]))
+    points = [w - 0.5 * float(n_b @ (w - p)) * n_b for w in corners]
+    out.append((ground, steep, feature_contact(-n_b, 197.9 / 401, points, [("B", 0, 2, 2), ("B", 0, 2, 3)])))
+    out.append((steep, ground, feature_contact(n_b, 197.9 / 401, points, [("A", 0, 2, 2), ("A", 0, 2, 3)])))
+    return out
+
+
+@pytest.mark.points(1)
+def test_feature_ids(student):
+    """Feature ids: which features touch at each contact point (AABBs, circle and box, polygons)"""
+    check_contacts(student, AABBS, "collide_aabb_aabb", [(BOX, b, want, 'feature ids ("A", reference face, '
+                   "incident face, the incident vertex each point comes from)") for b, want in AABB_IDS],
+                   "feature ids of axis-aligned boxes")
+    check_contacts(student, CIRCLE_POLYGON, "collide_circle_polygon",
+                   [(circle, box, want, 'feature ids ("face", i) or ("vertex", k) of the polygon')
+                    for circle, box, want in CIRCLE_POLYGON_IDS], "feature ids of a circle against a box")
+    check_contacts(student, POLYGONS, "collide_polygon_polygon",
+                   [(a, b, want, "feature ids (ref, reference face, incident face, the incident vertex each point "
+                     "comes from)") for a, b, want in polygon_ids_cases()], "feature ids of polygons")
 
 
 # Categories (Hypothesis: a failing case shrinks to a small one of the same category) -------------

@@ -23,8 +23,9 @@ from solutions.response.contact_solver import ContactSolver, SolverSettings  # n
 from solutions.response.pyramid_contacts import pyramid_contacts  # noqa: E402
 
 
-def best_solve_seconds(bodies, manifolds, settings: SolverSettings, repeats: int, dt: float = 1 / 60) -> float:
-    solver = ContactSolver(settings)
+def best_solve_seconds(bodies, manifolds, settings: SolverSettings, backend: str, repeats: int,
+                       dt: float = 1 / 60) -> float:
+    solver = ContactSolver(settings, backend=backend)
     best = float("inf")
     for _ in range(repeats):
         for body in bodies[1:]:
@@ -46,9 +47,9 @@ def run(quick: bool = False) -> list[dict]:
         for iterations in (10, 30):
             times = {}
             for backend in ("python", "numba"):
-                settings = SolverSettings(iterations=iterations, backend=backend)
-                best_solve_seconds(bodies, manifolds, settings, 1)      # compile / warm up
-                times[backend] = best_solve_seconds(bodies, manifolds, settings, repeats)
+                settings = SolverSettings(iterations=iterations)
+                best_solve_seconds(bodies, manifolds, settings, backend, 1)      # compile / warm up
+                times[backend] = best_solve_seconds(bodies, manifolds, settings, backend, repeats)
             rows.append({"boxes": len(bodies) - 1, "points": points, "iterations": iterations,
                          "python_ms": 1e3 * times["python"], "numba_ms": 1e3 * times["numba"],
                          "speedup": times["python"] / max(times["numba"], 1e-9)})

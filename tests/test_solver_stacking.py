@@ -115,7 +115,7 @@ def test_tilted_landing_clamps_the_separating_corner_to_zero(spin, backend):
     k, b = normal_system(box, contact.points, contact.normal)
     assert min(b) < 0.0 < max(b)       # one corner closes, the other opens
     (want,) = lcp_by_enumeration(k, b)
-    solver = ContactSolver(SolverSettings(**ONE_BLOCK_SOLVE, backend=backend))
+    solver = ContactSolver(SolverSettings(**ONE_BLOCK_SOLVE), backend=backend)
     solver.solve([ground, box], [(0, 1, contact)], DT)
     got = np.array([impulse[3] for impulse in solver.contact_impulses])
     np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-15)

@@ -22,6 +22,9 @@ from ..solver.constraint_rows import ConstraintRows, block_is_well_conditioned, 
 from ..solver.sweep_order import sweep_order
 from .solver_settings import SolverSettings, SolverStats
 
+#: The twins of the solver kernel (:func:`solutions.solver.kernel.kernel`).
+BACKENDS = ("python", "numba")
+
 #: ``order="auto"`` sweeps colour by colour from this many manifolds on (measured:
 #: below it the Python loop over the manifolds in their own order is as fast as the
 #: numpy batches of the colours; pyramid_10 has 145 manifolds, pyramid_20 about 540).
@@ -77,6 +80,17 @@ class PreparedContacts:
 class ContactPreparation:
     """Prestep and impulse memory of a contact solver (module docstring).
 
+    Parameters
+    ----------
+    settings : SolverSettings, optional
+        Switches and constants; the defaults follow box2d-lite.
+    backend : str
+        Which twin of the solver kernel runs the sweeps: ``"python"``, the readable
+        loop of :mod:`solutions.solver.kernel` (the teaching version), or ``"numba"``,
+        the same loop compiled (:mod:`solutions.solver.kernel_numba`, tested equal to
+        1e-12; numba is imported only when asked for).  Not a setting of the physics:
+        both give the same motion.
+
     Attributes
     ----------
     settings : SolverSettings
@@ -88,8 +102,11 @@ class ContactPreparation:
         tangent one along ``(n_y, -n_x)``.
     """
 
-    def __init__(self, settings: SolverSettings | None = None):
+    def __init__(self, settings: SolverSettings | None = None, backend: str = "python"):
         self.settings = SolverSettings() if settings is None else settings
+        if backend not in BACKENDS:
+            raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+        self.backend = backend
         self.stats = SolverStats()
         self.contact_impulses: list[tuple] = []
         self.reset()

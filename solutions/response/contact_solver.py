@@ -90,8 +90,8 @@ import numpy as np
 from ..body import Body
 from ..contact import Contact
 from ..solver.kernel import kernel
-from .contact_preparation import COLOURS_MIN_MANIFOLDS, ContactPreparation
-from .solver_settings import BACKENDS, ORDERS, POSITION_CORRECTIONS, SolverSettings, SolverStats
+from .contact_preparation import BACKENDS, COLOURS_MIN_MANIFOLDS, ContactPreparation
+from .solver_settings import ORDERS, POSITION_CORRECTIONS, SolverSettings, SolverStats
 
 # The settings and figures live in solver_settings.py (the soft step reads them too).
 __all__ = ["ContactSolver", "SolverSettings", "SolverStats", "POSITION_CORRECTIONS", "ORDERS", "BACKENDS",
@@ -179,7 +179,7 @@ class ContactSolver(ContactPreparation):
 
         # 4. Velocity sweeps, manifold by manifold in sweep order: the solver kernel with
         # rigid rows (mass scale 1, impulse scale 0) and Box2D v2's order (friction first).
-        solve_constraints = kernel(settings.backend)
+        solve_constraints = kernel(self.backend)
         rigid, no_softness = np.ones(c.point_count), np.zeros(c.point_count)
         sweep_normal, sweep_tangent = c.normal_total[c.order], c.tangent_total[c.order]
         solve_constraints(velocity, c.rows, settings.iterations, sweep_normal, sweep_tangent, target, rigid,

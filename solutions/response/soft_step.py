@@ -261,7 +261,7 @@ class SoftStepSolver(ContactPreparation):
         else:
             mass_scale, impulse_scale = np.ones(c.point_count), np.zeros(c.point_count)
         normal, tangent = c.normal_total[c.order], c.tangent_total[c.order]
-        kernel(settings.backend)(velocity, c.rows, settings.iterations, normal, tangent, target, mass_scale,
+        kernel(self.backend)(velocity, c.rows, settings.iterations, normal, tangent, target, mass_scale,
                                  impulse_scale)
         c.normal_total[c.order], c.tangent_total[c.order] = normal, tangent
         if use_bias:
@@ -282,7 +282,7 @@ class SoftStepSolver(ContactPreparation):
             if bounce.any():
                 velocity = states.velocity[self._rows]
                 normal, tangent = c.normal_total[c.order], c.tangent_total[c.order]
-                kernel(self.settings.backend)(velocity, c.rows, 1, normal, tangent,
+                kernel(self.backend)(velocity, c.rows, 1, normal, tangent,
                                               (-c.restitution * c.normal_velocity)[c.order],
                                               bounce[c.order].astype(float), np.zeros(c.point_count),
                                               use_friction=False, use_block=False)

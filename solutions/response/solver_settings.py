@@ -6,7 +6,6 @@ import math
 from dataclasses import dataclass
 
 POSITION_CORRECTIONS = ("none", "baumgarte", "projection", "split_impulse")
-BACKENDS = ("python", "numba")
 ORDERS = ("auto", "manifolds", "colours")
 
 
@@ -47,11 +46,6 @@ class SolverSettings:
         pair matched for warm starting when the new point has no feature id, or one
         the pair did not have last step (the narrow phase swapped the reference face,
         or clipped a different vertex).
-    backend : str
-        Which twin of the solver kernel runs the sweeps: ``"python"``, the readable
-        loop of :mod:`solutions.solver.kernel` (the teaching version), or ``"numba"``,
-        the same loop compiled (:mod:`solutions.solver.kernel_numba`, tested equal to
-        1e-12; numba is imported only when asked for).
     block_solver : bool
         Solve the two normal impulses of a two-point manifold together, as one 2x2
         linear complementarity problem (Box2D's block solver,
@@ -93,7 +87,6 @@ class SolverSettings:
     friction: bool = True
     rotation: bool = True
     warm_start_match_distance: float = 0.05
-    backend: str = "python"
     block_solver: bool = True
     order: str = "auto"
     max_push_velocity: float = 3.0
@@ -105,8 +98,6 @@ class SolverSettings:
         if self.position_correction not in POSITION_CORRECTIONS:
             raise ValueError(f"position_correction must be one of {POSITION_CORRECTIONS}, "
                              f"got {self.position_correction!r}")
-        if self.backend not in BACKENDS:
-            raise ValueError(f"backend must be one of {BACKENDS}, got {self.backend!r}")
         if self.order not in ORDERS:
             raise ValueError(f"order must be one of {ORDERS}, got {self.order!r}")
         if int(self.iterations) != self.iterations or self.iterations < 0:

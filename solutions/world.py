@@ -49,6 +49,35 @@ BATCH_MIN_BOX_PAIRS = 8
 
 BROAD_PHASES = ("auto", "all_pairs", "brute_force", "uniform_grid", "quadtree", "numpy_grid")
 
+#: ``broad_phase="auto"`` takes the method measured fastest for the scene
+#: (bench/bench_auto_broad_phase.py: processor time of one step's detection, broad plus
+#: narrow phase, 2 to 160 bodies; balls among box walls as in chapter 11, boxes on a
+#: ground, balls or boxes scattered).  Testing every pair directly wins only where the
+#: narrow phase costs less than building the AABBs: in scenes of at most this many
+#: bodies ...
+AUTO_ALL_PAIRS_MAX_BODIES = 2
+#: ... and in scenes of circles only (a test of two apart circles takes under 1 us) of
+#: at most this many bodies.
+AUTO_ALL_PAIRS_MAX_CIRCLES = 40
+#: Otherwise the brute-force AABB test is fastest below this many bodies (5 to 20 times
+#: faster than all pairs for scattered bodies of 8 to 64; at most 15 % slower for 3 to 6
+#: boxes that all touch) and the numpy grid from it on (within 10 % of each other from
+#: 64 to 96 bodies, the grid ahead beyond).
+AUTO_GRID_MIN_BODIES = 80
+
+
+def auto_broad_phase(shapes: list[Shape]) -> str:
+    """The broad phase ``"auto"`` runs for these world shapes (see ``AUTO_*`` above).
+
+    >>> auto_broad_phase([Circle((0, 0), 1)] * 10), auto_broad_phase([AABB((0, 0), (1, 1))] * 10)
+    ('all_pairs', 'brute_force')
+    """
+    n = len(shapes)
+    if n <= AUTO_ALL_PAIRS_MAX_BODIES or (n <= AUTO_ALL_PAIRS_MAX_CIRCLES
+                                          and all(isinstance(shape, Circle) for shape in shapes)):
+        return "all_pairs"
+    return "brute_force" if n < AUTO_GRID_MIN_BODIES else "numpy_grid"
+
 
 @dataclass
 class WorldSettings:
@@ -59,11 +88,10 @@ class WorldSettings:
     gravity : (float, float)
         Acceleration of gravity (m/s^2).
     broad_phase : str
-        One of ``BROAD_PHASES``.  ``"auto"`` tests all pairs directly below
-        ``broad_phase_min_bodies`` bodies (a broad phase costs more than it saves
-        there) and uses the numpy grid above.
-    broad_phase_min_bodies : int
-        Scene size from which ``"auto"`` runs a broad phase.
+        One of ``BROAD_PHASES``; every method gives the same contacts, only the time
+        differs.  ``"auto"`` takes the one measured fastest for the scene
+        (:func:`auto_broad_phase`): all pairs directly for two bodies and for up to 40
+        circles, the brute-force AABB test below 80 bodies, the numpy grid from 80 on.
     continuous : bool
         Sweep bodies flagged ``is_bullet`` against static bodies (no tunnelling).
     substeps : int
@@ -86,7 +114,6 @@ class WorldSettings:
 
     gravity: tuple[float, float] = (0.0, -9.81)
     broad_phase: str = "auto"
-    broad_phase_min_bodies: int = 16
     continuous: bool = True
     substeps: int = 1
     soft_step: bool = False
@@ -233,7 +260,7 @@ class World:
         method = self.settings.broad_phase
         n = len(shapes)
         if method == "auto":
-            method = "all_pairs" if n < self.settings.broad_phase_min_bodies else "numpy_grid"
+            method = auto_broad_phase(shapes)
         if method == "all_pairs":
             pairs = ((i, j) for i in range(n) for j in range(i + 1, n))
         else:

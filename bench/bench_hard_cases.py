@@ -1,4 +1,4 @@
-"""Hard scenes under a grid of settings: time per frame against error, reference and pymunk.
+"""Hard scenes under a grid of settings: time per frame against error, reference, pymunk and Box2D.
 
     python bench/bench_hard_cases.py [--quick] [--out DIR]
 
@@ -8,19 +8,22 @@ Every scene runs under every setting of the grid, side by side in one run:
   plain sub-steps (each sub-step a whole step, contacts found again);
 - the reference engine's soft step (Box2D v3 style, contacts found once per step):
   time step x sub-steps x sweeps per pass;
-- pymunk 7: time step x iterations.
+- pymunk 7: time step x iterations;
+- Box2D 2.3 (tools/box2d_mirror.py: polygons inset by Box2D's 0.01 m skin, materials
+  mixed as the reference's products): time step x velocity/position iterations.
 
 The runs of one scene advance together, one frame (1/60 s of simulated time) each in
 turn, so a busy machine slows all of them alike; the cost is the processor time per
-frame.  Every run is measured by one yardstick (solutions/scene_metrics.py, the
-reference narrow phase for overlaps): the deepest overlap, the largest drift of a body
-from its start, the largest gain of total energy over the start, and the momentum
-left at the end (|sum m v|, kg m/s; 0 for a scene that comes to rest).  The error of
-a scene is what its goal is about: max(overlap, drift) for stacks, pyramids and the
-mass ratio, the largest stretch of a link for the chain, and the overlap left after
-one second for overlap recovery.  Prints a table marking the Pareto-optimal settings
-of each scene (no other setting is both cheaper and more accurate) and writes
-DIR/hard_cases.md and DIR/hard_cases.png.
+frame spent stepping (for pymunk and Box2D their own step: copying their state into
+the reference bodies to measure them is not counted).  Every run is measured by one
+yardstick (solutions/scene_metrics.py, the reference narrow phase for overlaps): the
+deepest overlap, the largest drift of a body from its start, the largest gain of
+total energy over the start, and the momentum left at the end (|sum m v|, kg m/s; 0
+for a scene that comes to rest).  The error of a scene is what its goal is about:
+max(overlap, drift) for stacks, pyramids and the mass ratio, the largest stretch of a
+link for the chain, and the overlap left after one second for overlap recovery.
+Prints a table marking the Pareto-optimal settings of each scene (no other setting is
+both cheaper and more accurate) and writes DIR/hard_cases.md and DIR/hard_cases.png.
 """
 from __future__ import annotations
 
@@ -39,6 +42,7 @@ from solutions import scene_metrics as metrics  # noqa: E402
 from solutions.joints import anchor_world  # noqa: E402
 from solutions.scenes import get_scene  # noqa: E402
 from solutions.world import World  # noqa: E402
+from tools.box2d_mirror import Box2DMirror  # noqa: E402
 from tools.pymunk_mirror import build_space, copy_state  # noqa: E402
 
 FRAME = 1 / 60          # s of simulated time per frame
@@ -49,6 +53,7 @@ PLAIN_GRID = [(iterations, correction, substeps) for iterations in (10, 30)
               for correction in ("baumgarte", "split_impulse") for substeps in (1, 2)]
 SOFT_GRID = [(substeps, sweeps) for substeps in (4, 8) for sweeps in (1, 2)]
 PYMUNK_ITERATIONS = (10, 30)
+BOX2D_ITERATIONS = ((8, 3), (30, 10))  # (velocity, position) iterations
 QUICK_PLAIN_GRID = [(10, "split_impulse", 1), (30, "split_impulse", 1), (10, "baumgarte", 1)]
 QUICK_SOFT_GRID = [(4, 1), (8, 1)]
 QUICK_TIME_STEPS = (1 / 60, 1 / 120)
@@ -66,6 +71,7 @@ class Run:
     bodies: list
     step: object                       # advances the run by dt
     joints: list = field(default_factory=list)
+    sync: object = None                # untimed: copies an oracle's state into ``bodies``
     seconds: float = 0.0               # processor time spent stepping
     penetration: float = 0.0
     drift: float = 0.0
@@ -99,11 +105,15 @@ def make_runs(name: str, quick: bool) -> list[Run]:
             joints = scene.make_joints() if scene.make_joints else []
             space, pm_bodies = build_space(bodies, scene.gravity, iterations, 0.005, joints)
 
-            def step(space=space, pm_bodies=pm_bodies, bodies=bodies, h=dt):
-                space.step(h)
-                copy_state(pm_bodies, bodies)
-
-            runs.append(Run(name, "pymunk", f"{label} it={iterations}", dt, bodies, step, joints))
+            runs.append(Run(name, "pymunk", f"{label} it={iterations}", dt, bodies,
+                            lambda space=space, h=dt: space.step(h), joints,
+                            lambda pm_bodies=pm_bodies, bodies=bodies: copy_state(pm_bodies, bodies)))
+        for velocity_iterations, position_iterations in BOX2D_ITERATIONS:
+            mirror = Box2DMirror.from_scene(scene, velocity_iterations=velocity_iterations,
+                                            position_iterations=position_iterations)
+            runs.append(Run(name, "box2d", f"{label} it={velocity_iterations}/{position_iterations}", dt,
+                            mirror.bodies, lambda m=mirror, h=dt: m.step(h, copy=False), mirror.joints,
+                            mirror.copy_state))
     return runs
 
 
@@ -129,6 +139,8 @@ def simulate(name: str, seconds: float, quick: bool) -> list[dict]:
             for _ in range(steps):
                 run.step()
             run.seconds += time.process_time() - start
+            if run.sync:
+                run.sync()
             run.stretch = max(run.stretch, longest_stretch(run))
             if probe or frame == round(1.0 / FRAME) - 1:
                 deepest = metrics.max_penetration(run.bodies)
@@ -190,7 +202,8 @@ def figure(rows: list[dict], path: Path) -> None:
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
     fig, axes = plt.subplots(1, len(scenes), figsize=(4.2 * len(scenes), 3.8), squeeze=False)
     for ax, name in zip(axes[0], scenes):
-        for engine, kind, marker in (("reference", "plain", "o"), ("reference", "soft", "^"), ("pymunk", "", "s")):
+        for engine, kind, marker in (("reference", "plain", "o"), ("reference", "soft", "^"), ("pymunk", "", "s"),
+                                     ("box2d", "", "D")):
             pts = [r for r in rows if r["scene"] == name and r["engine"] == engine and kind in r["setting"]]
             ax.scatter([r["ms_per_frame"] for r in pts], [max(r["error"], 1e-6) for r in pts], marker=marker,
                        label=f"{engine} {kind}".strip(), alpha=0.8)

@@ -9,14 +9,17 @@ kinds exist:
     "got": contact}``.  Shapes and contacts are tagged dicts of :mod:`grader.codec`;
     ``expected`` is absent when the shapes are apart, ``got`` when the student's
     function returned no contact (or something that is not one).  Drawn: both
-    outlines labelled A and B, the expected contact points and normal (A to B) in
-    green, the returned ones in vermillion, dashed.
+    outlines labelled A and B (B dashed when it lies exactly on A), the expected
+    contact points and normal (A to B) in green, the returned ones in vermillion,
+    dashed.
 ``"pairs"`` (from :func:`grader.oracles.brute_force.pairs_figure`)
     ``{"kind": "pairs", "title": str, "aabbs": [[min_x, min_y, max_x, max_y], ...],
     "cell_size": float, "missed": [[i, j], ...], "extra": [[i, j], ...],
     "bounds": [min_x, min_y, max_x, max_y] or None}``.  Drawn: every box in grey, the
     boxes of missed pairs filled and joined in vermillion, those of extra pairs
-    (returned although the boxes are apart) hatched and joined in blue, the grid lines
+    (returned although the boxes are apart) hatched and joined in blue (a pair of
+    coincident boxes, whose line would have no length, is ringed; coincident boxes
+    are drawn nested, dashed, with one label "3=7"), the grid lines
     when ``cell_size > 0`` and the quadtree's root with its first splitting lines when
     ``bounds`` is given.
 
@@ -53,6 +56,8 @@ DPI = 100
 HALO = [withStroke(linewidth=3, foreground="white")]
 #: Boxes are numbered on the picture when there are at most this many.
 MAX_LABELLED_BOXES = 40
+#: Places of coincident boxes named in the legend (the rest are counted).
+MAX_LISTED_GROUPS = 4
 #: Grid lines are drawn when there are at most this many per axis.
 MAX_GRID_LINES = 150
 
@@ -225,6 +230,15 @@ def _shape_points(outline) -> tuple[np.ndarray, np.ndarray, float]:
     return outline, c, inner
 
 
+def _same_outline(first, second) -> bool:
+    """Whether two outlines of :func:`shape_outline` are the very same shape."""
+    if isinstance(first, tuple) != isinstance(second, tuple):
+        return False
+    if isinstance(first, tuple):
+        return bool(np.array_equal(first[0], second[0]) and first[1] == second[1])
+    return first.shape == second.shape and bool(np.array_equal(first, second))
+
+
 def _label_positions(centres: list[np.ndarray], radii: list[float]) -> list[np.ndarray]:
     """Where to write A and B: inside each shape, on the side away from the other one,
     so the labels stay clear of the contact drawn between them."""
@@ -273,15 +287,18 @@ def _contact_text(contact, name: str) -> str:
 def _draw_shapes(ax, figure: dict) -> None:
     shapes = list(figure.get("shapes") or [])[:2]
     extent_points, centres, radii = [], [], []
-    for shape, color in zip(shapes, SHAPE_COLORS):
-        outline = shape_outline(shape)
+    outlines = [shape_outline(shape) for shape in shapes]
+    # B exactly on A would hide it: then B's outline is dashed, so A's shows between.
+    same_place = len(outlines) == 2 and _same_outline(*outlines)
+    for index, (outline, color) in enumerate(zip(outlines, SHAPE_COLORS)):
+        style = "--" if same_place and index == 1 else "-"
         if isinstance(outline, tuple):
             c, r = outline
             ax.add_patch(CirclePatch(c, r, fill=True, facecolor=color, alpha=0.12, edgecolor="none"))
-            ax.add_patch(CirclePatch(c, r, fill=False, edgecolor=color, linewidth=2))
+            ax.add_patch(CirclePatch(c, r, fill=False, edgecolor=color, linewidth=2, linestyle=style))
         else:
             ax.add_patch(Polygon(outline, closed=True, facecolor=color, alpha=0.12, edgecolor="none"))
-            ax.add_patch(Polygon(outline, closed=True, fill=False, edgecolor=color, linewidth=2))
+            ax.add_patch(Polygon(outline, closed=True, fill=False, edgecolor=color, linewidth=2, linestyle=style))
         span, centre, inner = _shape_points(outline)
         extent_points.append(span)
         centres.append(centre)
@@ -299,6 +316,9 @@ def _draw_shapes(ax, figure: dict) -> None:
     fallback_start = np.mean(centres, axis=0) if centres else np.zeros(2)
 
     handles = [Patch(facecolor=c, alpha=0.4, edgecolor=c, label=f"shape {n}") for n, c in zip("AB", SHAPE_COLORS[:len(shapes)])]
+    if same_place:
+        handles.append(Line2D([], [], color=SHAPE_COLORS[1], linestyle="--", linewidth=2,
+                              label="A and B coincide (B dashed)"))
     drawn_points = [all_points]
     for key, color, style, marker, width in (("expected", EXPECTED_COLOR, "-", "o", 3.0),
                                              ("got", GOT_COLOR, "--", "x", 1.8)):
@@ -339,6 +359,25 @@ def _draw_shapes(ax, figure: dict) -> None:
     _set_limits(ax, np.vstack([all_points, view]))
     ax.set_title(_title(figure, "contact"), fontsize=11)
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.12), fontsize=8.5, frameon=False, ncol=1)
+
+
+def coincident_groups(boxes: np.ndarray) -> list[list[int]]:
+    """Indices of boxes with exactly the same corners, one sorted list per place with
+    more than one box, in order of their first index."""
+    places: dict[tuple, list[int]] = {}
+    for index, box in enumerate(boxes.tolist()):
+        places.setdefault(tuple(box), []).append(index)
+    return [group for group in places.values() if len(group) > 1]
+
+
+def _inset(box: np.ndarray, rank: int) -> float:
+    """How far inside its corners the ``rank``-th of coincident boxes is drawn (m): 6 %
+    of the shorter side per rank, at most a third of it."""
+    x0, y0, x1, y1 = (float(v) for v in box)
+    side = min(x1 - x0, y1 - y0)
+    if not math.isfinite(side) or side <= 0.0:
+        return 0.0
+    return min(0.06 * rank, 1 / 3) * side
 
 
 def _set_limits(ax, points: np.ndarray, margin: float = 0.12) -> None:
@@ -385,15 +424,28 @@ def _draw_pairs(ax, figure: dict) -> None:
     extra = _pair_list(figure.get("extra"), count)
     centres = (boxes[:, :2] + boxes[:, 2:]) / 2
 
+    # Boxes with the very same corners would hide one another: each is drawn inset a
+    # little more than the one before, and they share one label "3=7".
+    coincident = coincident_groups(boxes)
+    rank = {k: position for group in coincident for position, k in enumerate(group)}
     for index, (x0, y0, x1, y1) in enumerate(boxes):
-        ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, edgecolor=BOX_COLOR, linewidth=1.0, zorder=2))
+        inset = _inset(boxes[index], rank.get(index, 0))
+        ax.add_patch(Rectangle((x0 + inset, y0 + inset), x1 - x0 - 2 * inset, y1 - y0 - 2 * inset, fill=False,
+                               edgecolor=BOX_COLOR, linewidth=1.0, linestyle="--" if rank.get(index) else "-",
+                               zorder=2))
     handles = [Patch(facecolor="none", edgecolor=BOX_COLOR, label=f"boxes ({count})")]
+    if coincident:
+        shown = ", ".join("=".join(map(str, group)) for group in coincident[:MAX_LISTED_GROUPS])
+        more = f" and {len(coincident) - MAX_LISTED_GROUPS} more" if len(coincident) > MAX_LISTED_GROUPS else ""
+        handles.append(Line2D([], [], color=BOX_COLOR, linestyle="--",
+                              label=f"coincident boxes (drawn nested): {shown}{more}"))
 
     for pairs, color, hatch, style, word in ((missed, MISSED_COLOR, None, "-", "missed pair"),
                                              (extra, EXTRA_COLOR, "///", "--", "extra pair (boxes apart)")):
         members = sorted({k for pair in pairs for k in pair})
         for k in members:
-            x0, y0, x1, y1 = boxes[k]
+            inset = _inset(boxes[k], rank.get(k, 0))
+            x0, y0, x1, y1 = boxes[k] + np.array([inset, inset, -inset, -inset])
             if hatch is None:
                 ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, facecolor=color, alpha=0.3, edgecolor="none", zorder=3))
             else:
@@ -402,18 +454,26 @@ def _draw_pairs(ax, figure: dict) -> None:
             ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, edgecolor=color, linewidth=2.0, zorder=4))
         for i, j in pairs:
             (xa, ya), (xb, yb) = centres[i], centres[j]
-            ax.plot([xa, xb], [ya, yb], style, color=color, linewidth=2.0, marker="o", markersize=4, zorder=5)
+            if np.array_equal(boxes[i], boxes[j]):    # a line of length 0: ring the shared centre
+                ax.plot([xa], [ya], "o", markersize=16, markerfacecolor="none", markeredgecolor=color,
+                        markeredgewidth=2.0, zorder=5)
+            else:
+                ax.plot([xa, xb], [ya, yb], style, color=color, linewidth=2.0, marker="o", markersize=4, zorder=5)
         if pairs:
             handles.append(Line2D([], [], color=color, linewidth=2.0, linestyle=style, marker="o", markersize=4,
                                   label=f"{word}: {_pairs_text(pairs)}"))
 
     if count <= MAX_LABELLED_BOXES:
         highlighted = {k for pair in missed + extra for k in pair}
+        group_of = {k: group for group in coincident for k in group}
         for k, (cx, cy) in enumerate(centres):
-            ax.text(cx, cy, str(k), fontsize=9 if k in highlighted else 7, ha="center", va="center", zorder=6,
-                    path_effects=HALO,
-                    color="black" if k in highlighted else "#555555",
-                    fontweight="bold" if k in highlighted else "normal")
+            group = group_of.get(k, [k])
+            if k != group[0]:
+                continue                                   # one label per place
+            strong = any(member in highlighted for member in group)
+            ax.text(cx, cy, "=".join(map(str, group)), fontsize=9 if strong else 7, ha="center", va="center",
+                    zorder=6, path_effects=HALO, color="black" if strong else "#555555",
+                    fontweight="bold" if strong else "normal")
 
     points = [boxes[:, :2], boxes[:, 2:]] if count else [np.zeros((1, 2))]
     bounds = figure.get("bounds")

@@ -231,7 +231,8 @@ def run_autograder(root: str | os.PathLike | None = None, isolation: str = "auto
     When the grader itself fails, no results.json is written (Gradescope then tells the
     student the autograder failed) and the reason is printed.
     """
-    from .grade import DEFAULT_PER_SUBMISSION_SECONDS, GradingError, grade_submissions
+    from .errors import GradingError
+    from .grade import DEFAULT_PER_SUBMISSION_SECONDS, grade_submissions
     from .spec import SpecError
 
     root = Path(root) if root is not None else autograder_root()

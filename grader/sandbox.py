@@ -7,7 +7,8 @@ Isolation, strongest available first:
   the system and Python folders (read-only), its own copy of the submission at
   ``/sandbox`` and an empty ``/tmp``; no network, its own process namespace (every
   process it leaves behind dies with it), and it runs as an unprivileged user of its
-  own (one uid per parallel job) with no capabilities.
+  own (one uid per parallel job) with no capabilities, in a user namespace of its own
+  (its uid mapped to itself, nothing else: a kernel keyring and namespaces of its own).
 - ``"plain"``: the same worker with the same CPU, memory and file limits but the
   host's file system (for machines without bubblewrap).  Run as root, and when Python
   is installed where any user can run it, the worker still drops to its own
@@ -382,11 +383,21 @@ class Sandbox:
                 "--proc", "/proc", "--dev", "/dev",
                 "--unshare-pid", "--unshare-net", "--unshare-ipc", "--unshare-uts", "--unshare-cgroup-try",
                 "--die-with-parent", "--new-session", "--hostname", "sandbox"]
-        if self._seccomp_fd is not None:
-            cmd += ["--seccomp", str(self._seccomp_fd)]
         drop = ["setpriv", f"--reuid={self.uid}", f"--regid={self.uid}", "--clear-groups", "--no-new-privs",
                 "--bounding-set=-all", "--inh-caps=-all"]
-        return cmd + ["--", *drop, *python]
+        # A second bubblewrap, started as the sandbox's user, puts the worker in a user
+        # namespace of its own (the sandbox uid mapped to itself, nothing else mapped, no
+        # capability anywhere): a keyring and namespaces of its own.  It is unprivileged, so
+        # it binds the first one's root as it is (read-only mounts stay read-only), and it
+        # loads the seccomp filter last, which then refuses any further namespace.
+        # Its own process namespace too: the worker and what it starts see only their
+        # own init, which ignores their signals, so they cannot stop this bubblewrap.
+        user_namespace = ["bwrap", "--unshare-user", "--uid", str(self.uid), "--gid", str(self.uid),
+                          "--unshare-pid", "--bind", "/", "/", "--chdir", SANDBOX_MOUNT,
+                          "--die-with-parent"]
+        if self._seccomp_fd is not None:
+            user_namespace += ["--seccomp", str(self._seccomp_fd)]
+        return cmd + ["--", *drop, *user_namespace, "--", *python]
 
     def _environment(self) -> dict[str, str]:
         env = {"PATH": "/usr/bin:/bin", "HOME": SANDBOX_MOUNT if self.isolation == "bwrap" else str(self.workdir),
@@ -682,10 +693,20 @@ class Sandbox:
         # The memory cage lists every process of this sandbox (none can leave it): far
         # cheaper than reading the whole process table after every call.
         caged = self._cage.pids() if self._cage is not None and worker_pid is not None else None
-        for pid, fields in process_table(caged):
-            if int(fields.get("Uid", "-1").split()[0]) != self.uid:
-                continue
-            if worker_pid is not None and fields.get("NSpid", "").split()[-1:] == [str(worker_pid)]:
+        table = [(pid, fields) for pid, fields in process_table(caged)
+                 if int(fields.get("Uid", "-1").split()[0]) == self.uid]
+        spared: set[int] = set()
+        if worker_pid is not None:
+            parent_of = {pid: int(fields.get("PPid", "0").split()[0] or 0) for pid, fields in table}
+            for pid, fields in table:
+                if fields.get("NSpid", "").split()[-1:] == [str(worker_pid)]:
+                    # The worker and its ancestors of the sandbox's user: the bubblewrap
+                    # holding its user and process namespaces, and that namespace's init.
+                    while pid in parent_of and pid not in spared:
+                        spared.add(pid)
+                        pid = parent_of[pid]
+        for pid, fields in table:
+            if pid in spared:
                 continue
             try:
                 os.kill(pid, signal.SIGKILL)

@@ -236,6 +236,9 @@ def checked_path(path: str | os.PathLike) -> os.stat_result:
         raise _link_refusal(path, f"the submission {_shown(path.name)}")
     if not (stat.S_ISDIR(info.st_mode) or stat.S_ISREG(info.st_mode)):
         raise SubmissionRefused(f"the submission {_shown(path.name)} is not a regular file or folder")
+    if stat.S_ISREG(info.st_mode) and info.st_nlink > 1:
+        raise SubmissionRefused(f"the submission {_shown(path.name)} is a hard link (one file with {info.st_nlink} "
+                                "names on this disk, perhaps another student's); hand in a copy")
     return info
 
 
@@ -255,7 +258,7 @@ def scan_folder(folder: str | os.PathLike, max_files: int = MAX_FILES, max_total
 
     Reads nothing but ``lstat``, and stops at the first problem, raising
     SubmissionRefused saying what it is: a symbolic link (at any depth; links are
-    never followed), a special file, more than ``max_files`` entries (files, folders
+    never followed), a hard link (a file with more than one name), a special file, more than ``max_files`` entries (files, folders
     and links, counted as they are listed), or more than ``max_total_bytes`` bytes (each file counted at its
     apparent size or its allocated blocks, the larger).  Litter such as
     ``__pycache__`` is counted too: it is on the disk, though the grader never reads it.
@@ -294,6 +297,12 @@ def scan_folder(folder: str | os.PathLike, max_files: int = MAX_FILES, max_total
             if stat.S_ISDIR(info.st_mode):
                 folders.append(child)
             elif stat.S_ISREG(info.st_mode):
+                if info.st_nlink > 1 and links == "refuse":
+                    # A hard link names a file that also lives elsewhere (the reference,
+                    # another student's folder): its content is not this submission's own.
+                    raise SubmissionRefused(f"{shown} is a hard link (one file with {info.st_nlink} names on this "
+                                            "disk); the grader takes only files of the submission's own: hand in "
+                                            "copies")
                 size = _stored_size(info)
                 total += size
                 if total > max_total_bytes:

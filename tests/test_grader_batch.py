@@ -24,7 +24,9 @@ from types import SimpleNamespace
 
 import pytest
 
-from grader.grade import GradingError, grade_submissions, spec_hash, write_gradebook
+from grader.errors import GradingError
+from grader.grade import grade_submissions
+from grader.gradebook import spec_hash, write_gradebook
 from grader.outcome import Outcome
 from grader import results as gs_results
 from grader import run as grader_run

@@ -16,6 +16,7 @@ import sys
 import types
 from pathlib import Path
 
+import matplotlib.colors
 import matplotlib.image
 import numpy as np
 import pytest
@@ -23,6 +24,7 @@ import pytest
 from grader import figures as grader_figures
 from grader.check import CheckError, check, find_package, main, select_tests
 from grader.figures import EXPECTED_COLOR, EXTRA_COLOR, GOT_COLOR, MISSED_COLOR, draw_figure, figure_png_base64, save_figure
+from matplotlib.patches import Rectangle
 from grader.spec import load_spec
 
 check_module = importlib.import_module("grader.check")  # `grader.check` may name the function
@@ -240,6 +242,35 @@ def test_pairs_figure_highlights_missed_and_extra_pairs_on_the_grid(tmp_path):
     image = png_pixels(data)
     assert image.std() > 0.05
     assert pixels_near(image, MISSED_COLOR) > 100 and pixels_near(image, EXTRA_COLOR) > 100
+
+
+def test_coincident_boxes_are_drawn_apart_and_labelled_together():
+    figure = {"kind": "pairs", "title": "pairs_grid_every_cell: coincident boxes", "cell_size": 1.0,
+              "aabbs": [[0, 0, 1, 1], [3, 3, 4, 4], [0, 0, 1, 1], [0, 0, 1, 1], [3, 3, 4, 4]],
+              "missed": [[0, 2]], "extra": []}
+    ax = draw_figure(figure).axes[0]
+    grey = [p for p in ax.patches if isinstance(p, Rectangle) and p.get_edgecolor()[:3] == matplotlib.colors.to_rgb(
+        grader_figures.BOX_COLOR)]
+    corners = {(round(p.get_x(), 9), round(p.get_y(), 9), round(p.get_width(), 9)) for p in grey}
+    assert len(grey) == 5 and len(corners) == 5            # five outlines, none on top of another
+    texts = {t.get_text() for t in ax.texts}
+    assert {"0=2=3", "1=4"} <= texts and not {"2", "3", "4"} & texts
+    labels = " ".join(t.get_text() for t in ax.get_legend().get_texts())
+    assert "coincident boxes (drawn nested): 0=2=3, 1=4" in labels and "missed pair: (0, 2)" in labels
+    rings = [line for line in ax.lines if line.get_marker() == "o" and line.get_markersize() == 16]
+    assert len(rings) == 1                                   # the pair (0, 2) has no line to draw
+    assert pixels_near(image_of(figure), MISSED_COLOR) > 100
+
+
+def test_coincident_shapes_draw_b_dashed():
+    figure = {"kind": "shapes", "title": "collide: the same box twice", "shapes": [SHAPES_B[0], SHAPES_B[0]],
+              "expected": CONTACT_UP}
+    ax = draw_figure(figure).axes[0]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "A and B coincide (B dashed)" in labels
+    assert sorted(p.get_linestyle() for p in ax.patches if not p.get_fill()) == ["-", "--"]
+    apart = {"kind": "shapes", "title": "collide: a case", "shapes": [CIRCLE_A, SHAPES_B[0]], "expected": CONTACT_UP}
+    assert "A and B coincide (B dashed)" not in [t.get_text() for t in draw_figure(apart).axes[0].get_legend().get_texts()]
 
 
 def test_quadtree_figure_draws_the_root_bounds():

@@ -43,7 +43,8 @@ import pytest
 
 from grader import codec
 from grader import hostile_cases as hc
-from grader.grade import LOG_NAME, grade_submissions, read_grading_log
+from grader.grade import grade_submissions
+from grader.gradebook import LOG_NAME, read_grading_log
 from grader.results import check_results, write_results
 from grader.sandbox import (RESPONSE_LIMIT, SANDBOX_UID_BASE, Limits, Sandbox, bwrap_available, processes_of,
                             stray_processes, uid_in_use)
@@ -216,7 +217,7 @@ class PeakMemory:
     """The peak resident memory (VmHWM, bytes) of this process's child processes whose
     command line holds ``pattern`` (the grading workers), polled while in use."""
 
-    def __init__(self, pattern: str = "grader.grade"):
+    def __init__(self, pattern: str = "grader.scheduler"):
         self.pattern = pattern
         self.peak = 0
         self.seen: set[int] = set()
@@ -942,6 +943,25 @@ def test_a_symbolic_link_anywhere_in_a_submission_is_refused_not_followed(tmp_pa
         assert folder == tmp_path / "module"
     for name in ("package", "friend-link"):
         assert "is a symbolic link" in refusal(tmp_path / name, verify=False), name
+
+
+def test_a_hard_link_in_or_as_a_submission_is_refused(tmp_path):
+    """A hard link is a second name of a file that lives elsewhere (the reference,
+    a friend's folder or zip): its content is not the submission's own."""
+    friend = stub_folder(tmp_path / "friend")
+    (friend / "exercises" / "momentum.py").write_text("ANSWER = 42\n")
+    shutil.make_archive(str(tmp_path / "friend"), "zip", friend)
+    linked = stub_folder(tmp_path / "linked")
+    os.link(friend / "exercises" / "momentum.py", linked / "exercises" / "momentum.py")
+    before = bytes_read()
+    with pytest.raises(SubmissionRefused, match="is a hard link") as refused:
+        fingerprint(linked)
+    assert "exercises/momentum.py" in str(refused.value) and bytes_read() - before < 64 * 1024
+    assert "is a hard link" in refusal(linked)
+    os.link(tmp_path / "friend.zip", tmp_path / "copycat.zip")
+    with pytest.raises(SubmissionRefused, match="the submission 'copycat.zip' is a hard link"):
+        checked_path(tmp_path / "copycat.zip")
+    assert "the submission 'copycat.zip' is a hard link" in refusal(tmp_path / "copycat.zip")
 
 
 @needs_sandbox

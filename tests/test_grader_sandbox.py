@@ -63,6 +63,10 @@ def hogs_together(children, megabytes):
         killed += os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGKILL
     return killed
 
+def user_namespace():
+    # Which user namespace the worker runs in, and what it maps.
+    return [os.readlink("/proc/self/ns/user"), open("/proc/self/uid_map").read().split(), os.getuid()]
+
 def kernel_channels():
     # The keyring (a channel to a later submission), namespaces, anonymous memory files.
     import ctypes
@@ -183,6 +187,18 @@ def test_seccomp_refuses_keyring_namespaces_and_memfd(package, isolation):
 
 
 @needs_bwrap
+def test_the_worker_has_a_user_namespace_of_its_own(package):
+    with Sandbox(package, isolation="bwrap") as box:
+        result = box.call("exercises.hostile", "user_namespace")
+    assert result.status == "ok", result.message
+    namespace, uid_map, uid = result.value
+    assert namespace != os.readlink("/proc/self/ns/user")
+    assert uid == box.uid and uid != 0
+    # One line: the sandbox uid, seen from the namespace's parent, is the sandbox uid (never root).
+    assert len(uid_map) == 3 and int(uid_map[0]) == uid and int(uid_map[2]) == 1
+
+
+@needs_bwrap
 def test_writable_folders_are_capped_and_the_package_is_read_only(package):
     with Sandbox(package, Limits(disk_bytes=32 * 1024**2), isolation="bwrap") as box:
         written, error = box.call("exercises.hostile", "fill_disk").value
@@ -284,7 +300,9 @@ def test_writes_outside_the_sandbox_change_nothing(sandbox, tmp_path):
 
 @needs_bwrap
 def test_runs_as_an_unprivileged_user_in_its_own_folder(sandbox):
-    uid, cwd = sandbox.call("exercises.hostile", "whoami").value
+    result = sandbox.call("exercises.hostile", "whoami")
+    assert result.status == "ok", (result.status, result.message)
+    uid, cwd = result.value
     assert uid != 0 and uid != os.getuid() and cwd == "/sandbox"
 
 
@@ -293,8 +311,10 @@ def test_no_process_outlives_the_call_or_the_sandbox(package):
     with Sandbox(package, slot=7) as box:
         assert box.call("exercises.hostile", "leave_process").status == "ok"
         uid = box.uid
-        # Inside the sandbox's process namespace: the init and the worker only.
-        assert box.call("exercises.hostile", "count_processes").value == 2
+        # The sandbox's /proc: bubblewrap's init, the bubblewrap holding the worker's user
+        # and process namespaces, that namespace's init, and the worker; the process the
+        # last call left behind is gone.
+        assert box.call("exercises.hostile", "count_processes").value == 4
     time.sleep(0.5)
     leftovers = [p for p in os.listdir("/proc") if p.isdigit() and _uid_of(p) == uid]
     assert leftovers == []

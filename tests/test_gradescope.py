@@ -55,7 +55,7 @@ def test_archive_holds_what_gradescope_needs_at_its_top(archive):
     with zipfile.ZipFile(archive) as handle:
         infos = {info.filename: info for info in handle.infolist()}
     for name in ("setup.sh", "run_autograder", "requirements.txt", "pyproject.toml", "grader/__init__.py",
-                 "grader/grade.py", "grader/worker.py", "grader/plugin.py", "grader/tests/pytest.ini",
+                 "grader/grade.py", "grader/scheduler.py", "grader/gradebook.py", "grader/isolation.py", "grader/worker.py", "grader/plugin.py", "grader/tests/pytest.ini",
                  "grader/tests/conftest.py", "grader/tests/public/test_momentum.py", "grader/tests/hidden/test_grid.py",
                  "solutions/__init__.py"):
         assert name in infos, name

@@ -56,7 +56,7 @@ REPO = Path(__file__).resolve().parent.parent
 PYTHON = sys.executable
 SITE_PACKAGES = sysconfig.get_path("purelib")
 MIN_TOKENS = 8
-NEVER = ("grade.py", "gradescope.py", "example_class.py", "hostile_cases.py", "similarity.py", "report.py",
+NEVER = ("grade.py", "gradebook.py", "scheduler.py", "isolation.py", "gradescope.py", "example_class.py", "hostile_cases.py", "similarity.py", "report.py",
          "release.py")
 #: Python of this .venv without the repository's editable install (see the docstring).
 STUDENT_PRELUDE = (f"import sys; sys.prefix = sys.exec_prefix = {sys.prefix!r}; "

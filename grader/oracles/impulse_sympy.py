@@ -245,7 +245,8 @@ def resolve_collision(a: dict, b: dict, contact: dict, restitution: float | None
 
     Normal impulses of all points at once (complementarity, see the module docstring),
     then one friction pass over the points in order, each clamped by ``mu j_i`` and
-    skipped when ``j_i = 0``, ``mu = 0`` or the tangent's ``k = 0``.
+    skipped when ``j_i = 0``, ``mu = 0`` or the tangent's ``k = 0``.  Two static bodies
+    get no impulse at all (``K = 0``).
     """
     e = a["restitution"] * b["restitution"] if restitution is None else float(restitution)
     mu = a["friction"] * b["friction"] if friction is None else float(friction)
@@ -254,7 +255,11 @@ def resolve_collision(a: dict, b: dict, contact: dict, restitution: float | None
     points = [tuple(p) for p in contact["points"]]
     v_n = np.array([relative_normal_velocity(a, b, p, n) for p in points])
     target = np.where(v_n < 0.0, -e * v_n, 0.0)
-    normal_impulses = _lcp(response_matrix(a, b, points, n), target - v_n)
+    if plain.inverse_mass(a) + plain.inverse_mass(b) == 0.0:
+        # Two static bodies: K = 0, no impulse can change anything (as for one point, j = 0 when k = 0).
+        normal_impulses = np.zeros(len(points))
+    else:
+        normal_impulses = _lcp(response_matrix(a, b, points, n), target - v_n)
     for p, j in zip(points, normal_impulses):
         if j > 0.0:
             a, b = apply_impulse(a, b, p, (j * n[0], j * n[1]))

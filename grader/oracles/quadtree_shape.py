@@ -76,6 +76,8 @@ def structure_problem(structure, aabbs, max_bodies_per_node: int, min_node_area:
         return problem
     nodes = structure["nodes"]
     boxes = [[float(v) for v in box] for box in aabbs]
+    if nodes[0]["depth"] != 0:
+        return f"the root has depth {nodes[0]['depth']}; the root's depth is 0"
     if root_bounds is not None and [float(v) for v in nodes[0]["bounds"]] != [float(v) for v in root_bounds]:
         return f"the root's bounds are {nodes[0]['bounds']}, expected the given bounds {list(root_bounds)}"
     stored: dict[int, int] = {}
@@ -116,7 +118,9 @@ def structure_problem(structure, aabbs, max_bodies_per_node: int, min_node_area:
             for ancestor in ancestors:
                 if _touches_lines(box, nodes[ancestor]["bounds"]):
                     return (f"body {index} {box} is stored in {where}, below a node whose splitting lines it "
-                            "touches: it must stay at that node, or its touching partners across the line are missed")
+                            "touches: a box touching or crossing a splitting line has no child, it must stay at "
+                            "that node, or a partner touching it from across the line can end in another subtree "
+                            "and be missed")
             if children and not _touches_lines(box, bounds) and (ancestors or _inside(box, bounds)):
                 return (f"body {index} {box} is stored at the inner {where}, but one of its children holds it "
                         "whole: it must go down")

@@ -40,15 +40,16 @@ def pairs_text(pairs, limit: int = 10) -> str:
     return "{" + text + (", ..." if len(pairs) > limit else "") + "}"
 
 
-def wrong_answer(function: str, boxes, cell: float, answer) -> tuple[str, dict] | None:
-    """None if ``answer`` is the brute-force set of pairs, else (message, figure)."""
-    want = overlapping_pairs(boxes)
+def wrong_answer(function: str, boxes, cell: float, answer, want=None, title: str = "") -> tuple[str, dict] | None:
+    """None if ``answer`` is the right set of pairs (brute force unless ``want``, pairs
+    derived by hand), else (message, figure titled ``title``)."""
+    want = overlapping_pairs(boxes) if want is None else set(want)
     problem, missed, extra = compare_pairs(answer, want)
     if problem is None:
         return None
     message = (f"{function}(aabbs={describe_boxes(boxes)}, cell_size={cell:g}) should return the pairs "
                f"{pairs_text(want)} (boxes overlapping or touching, i < j), got {show(answer)}: {problem}")
-    return message, pairs_figure(boxes, missed, extra, f"{function}, cell size {cell:g} m", cell_size=cell)
+    return message, pairs_figure(boxes, missed, extra, title or f"{function}, cell size {cell:g} m", cell_size=cell)
 
 
 def check_scene(student, function: str, boxes, cell: float, label: str) -> None:
@@ -155,14 +156,17 @@ def negative_cells(draw):
 @st.composite
 def wide_boxes(draw):
     """(boxes, cell): a box 2 to 6 cells wide (or tall) with a partner overlapping or
-    touching its far end, the partner small or wide too: their centres lie several
-    cells apart.  Coordinates in quarter cells."""
+    touching its far end, the partner small or wide too; their centres lie at least two
+    cells apart, so the partner's centre cell is outside the 3 x 3 cells around the long
+    box's centre cell.  Coordinates in quarter cells."""
     cell = draw(st.sampled_from([1.0, 0.5]))
     q = cell / 4
     x0, y0 = draw(st.integers(-12, 12)), draw(st.integers(-12, 12))
-    length, thick = draw(st.integers(8, 24)), draw(st.integers(1, 4))
+    overlap = draw(st.integers(0, 2))                            # 0: touches the far end
     plength, pthick = draw(st.one_of(st.integers(1, 4), st.integers(8, 24))), draw(st.integers(1, 4))
-    start = draw(st.integers(x0 + length - 2, x0 + length))     # overlaps or touches the far end
+    # Centres (length - 2 overlap + plength) / 2 quarters apart: at least 8 (two cells).
+    length, thick = draw(st.integers(max(8, 16 + 2 * overlap - plength), 24)), draw(st.integers(1, 4))
+    start = x0 + length - overlap
     py = draw(st.integers(y0 - pthick, y0 + thick))
     a, b = [x0, y0, x0 + length, y0 + thick], [start, py, start + plength, py + pthick]
     if draw(st.booleans()):                                      # the same along y
@@ -193,6 +197,19 @@ SPECIAL_CASES = [
     ("a point on a cell line between two touching boxes", [[1, 0.5, 1, 0.5], [0, 0, 1, 1], [1, 0, 2, 1],
                                                             [2.5, 2.5, 3, 3]], [(0, 1), (0, 2), (1, 2)]),
     ("a small box inside a large one", [[0, 0, 10, 10], [4, 4, 5, 5]], [(0, 1)]),
+    # Cells of 1 m: box 0 is one cell, box 1 touches it at x = 1 and its centre (2, 0.5)
+    # lies on the cell line x = 2, two cells from box 0's centre cell.
+    ("a box as large as a cell touching one whose centre is on a cell line",
+     [[0, 0, 1, 1], [1, 0, 3, 1]], [(0, 1)]),
+    # Box 1 touches box 0 along x = -2; the centres (-1, -1) and (-3, 0) lie on cell lines.
+    ("boxes at negative coordinates with centres on cell lines", [[-2, -2, 0, 0], [-4, -1, -2, 1]], [(0, 1)]),
+    # Cells of 1 m: box 1 spans the cells x = 0 to 2 and touches box 0 (all in cell (0, 0))
+    # at x = 0.5; box 1's centre (1.625, 0.5) is in cell (1, 0), which box 0 does not overlap.
+    ("a small box at the origin touching one two cells long", [[0, 0, 0.5, 0.5], [0.5, 0.25, 2.75, 0.75]],
+     [(0, 1)]),
+    # Box 0 is 8 m long: its centre (4, 0.25) is about four cells from box 1's (8.25, 1.125).
+    ("a long thin box meeting a small one at its far end", [[0, 0, 8, 0.5], [7.5, 0.25, 9, 2], [3, 3, 4, 4]],
+     [(0, 1)]),
     # Box 1 lies inside box 0; box 2 touches box 0 at the corner (0, 0) only.
     ("boxes at negative coordinates", [[-1, -1, 0, 0], [-0.5, -0.5, -0.25, -0.25], [0, 0, 1, 1]], [(0, 1), (0, 2)]),
 ]
@@ -200,19 +217,14 @@ SPECIAL_CELLS = (1.0, 0.5, 3.0)
 
 
 def check_special_cases(student, function: str) -> None:
-    cases = [(name, np.array(boxes, dtype=float), set(want), cell)
+    cases = [(name, np.array(boxes, dtype=float), want, cell)
              for name, boxes, want in SPECIAL_CASES for cell in SPECIAL_CELLS]
     answers = student.call_many(MODULE, function, [(boxes, cell) for _, boxes, _, cell in cases])
-    wrong = []
-    for (name, boxes, want, cell), answer in zip(cases, answers):
-        problem, missed, extra = compare_pairs(answer, want)
-        if problem is not None:
-            wrong.append((name, boxes, want, cell, answer, problem, missed, extra))
+    wrong = [(name, found) for (name, boxes, want, cell), answer in zip(cases, answers)
+             if (found := wrong_answer(function, boxes, cell, answer, want, f"{function}: {name}")) is not None]
     if wrong:
-        name, boxes, want, cell, answer, problem, missed, extra = wrong[0]
-        fail(f"{len(wrong)} of {len(cases)} special cases wrong, e.g. {name}: {function}(aabbs={describe_boxes(boxes)}, "
-             f"cell_size={cell:g}) should return {pairs_text(want)}, got {show(answer)}: {problem}",
-             figure=pairs_figure(boxes, missed, extra, f"{function}: {name}", cell_size=cell))
+        name, (message, figure) = wrong[0]
+        fail(f"{len(wrong)} of {len(cases)} special cases wrong, e.g. {name}: {message}", figure=figure)
 
 
 # Insert in every cell -----------------------------------------------------------------------
@@ -231,14 +243,11 @@ def test_every_cell_touching(student):
     # also after moving the scene by (-3, -3).
     boxes = np.array([[0, 0, 1, 1], [1, 0, 2, 1], [2, 1, 3, 2], [-1, -1, 0, 0], [5, 5, 6, 6], [4, 4, 5, 5]], float)
     want = {(0, 1), (1, 2), (0, 3), (4, 5)}
-    for shifted in (boxes, boxes - 3.0):
-        for cell in (1.0, 0.5):
-            answer = student.call(MODULE, EVERY_CELL, shifted, cell)
-            problem, missed, extra = compare_pairs(answer, want)
-            if problem is not None:
-                fail(f"{EVERY_CELL}(aabbs={describe_boxes(shifted)}, cell_size={cell:g}) should return "
-                     f"{pairs_text(want)}, got {show(answer)}: {problem}",
-                     figure=pairs_figure(shifted, missed, extra, f"{EVERY_CELL}: touching on cell lines", cell))
+    scenes = [(shifted, cell) for shifted in (boxes, boxes - 3.0) for cell in (1.0, 0.5)]
+    for (shifted, cell), answer in zip(scenes, student.call_many(MODULE, EVERY_CELL, scenes)):
+        found = wrong_answer(EVERY_CELL, shifted, cell, answer, want, f"{EVERY_CELL}: touching on cell lines")
+        if found is not None:
+            fail(found[0], figure=found[1])
 
 
 @pytest.mark.points(1)

@@ -12,7 +12,9 @@ restitution and friction are the products e_A e_B and mu_A mu_B.
 The seeded cases cover both dynamic bodies, one static body (A or B), fixed rotation,
 one- and two-point manifolds, approaching and separating contacts (and v_n = 0
 exactly), velocities and normals in every direction, restitution 0 and 1, friction
-off, sticking and sliding.  Every returned value and every field of both bodies after
+off, sticking and sliding.  The limit cases are worked by hand: two static bodies
+closing in, k = 1 exactly, friction exactly at the Coulomb limit, infinite friction,
+depth - slop of 0 and of 1 m.  Every returned value and every field of both bodies after
 the call is compared; NaN or infinite answers never pass.
 """
 from __future__ import annotations
@@ -257,27 +259,31 @@ def magnitude_cases() -> list[tuple]:
     return cases
 
 
+def magnitude_problem(case: tuple, got) -> str | None:
+    a, b, p, n, e = case
+    want = oracle.normal_impulse(a, b, p, n, e)
+    found = number("j", got, want, rtol=RTOL, atol=1e-12)
+    if not found:
+        return None
+    v_n = oracle.relative_normal_velocity(a, b, p, n)
+    if v_n >= 0:
+        return (f"{found}; here v_n = {v_n:.6g} m/s >= 0 (separating or sliding): a contact pushes, never "
+                "pulls, so j = 0")
+    k = oracle.effective_mass_inverse(a, b, p, n)
+    if k == 0:
+        return (f"{found}; both bodies are static (k = 0 1/kg, here v_n = {v_n:.6g} m/s): no impulse can move "
+                "them, so j = 0 (and no division by k)")
+    return (f"{found}; v_n = {v_n:.6g} m/s, k = {k:.6g} 1/kg: "
+            "j = -(1 + e) v_n / k with k = 1/m_A + 1/m_B + (r_A x n)^2/I_A + (r_B x n)^2/I_B (sympy)")
+
+
 @pytest.mark.points(2)
 @pytest.mark.title("Impulse magnitude with angular terms (sympy)")
 def test_magnitude(student):
     """j = -(1 + e) v_n / k for approaching contacts, 0 for separating ones."""
     cases = magnitude_cases()
     answers = student.call_many(MODULE, "normal_impulse_magnitude", cases)
-
-    def problem(case_answer):
-        (a, b, p, n, e), got = case_answer
-        want = oracle.normal_impulse(a, b, p, n, e)
-        found = number("j", got, want, rtol=RTOL, atol=1e-12)
-        if not found:
-            return None
-        v_n = oracle.relative_normal_velocity(a, b, p, n)
-        if v_n >= 0:
-            return (f"{found}; here v_n = {v_n:.6g} m/s >= 0 (separating or sliding): a contact pushes, never "
-                    "pulls, so j = 0")
-        return (f"{found}; v_n = {v_n:.6g} m/s, k = {oracle.effective_mass_inverse(a, b, p, n):.6g} 1/kg: "
-                "j = -(1 + e) v_n / k with k = 1/m_A + 1/m_B + (r_A x n)^2/I_A + (r_B x n)^2/I_B (sympy)")
-
-    check_cases(zip(cases, answers), problem, "normal_impulse_magnitude",
+    check_cases(zip(cases, answers), lambda ca: magnitude_problem(*ca), "normal_impulse_magnitude",
                 describe=lambda ca: f"normal_impulse_magnitude{show_inputs(*ca[0][:2], *ca[0][2:])}")
 
 
@@ -447,6 +453,139 @@ def test_correct_positions(student):
     results = [student.call_with_state(CORRECTION, "correct_positions", *case) for case in cases]
     check_cases(zip(cases, results), lambda cr: correction_problem(*cr), "correct_positions",
                 describe=lambda cr: describe_correction(cr[0]))
+
+
+# Limits and thresholds ----------------------------------------------------------------------------
+def limit_cases() -> list[tuple[str, tuple, str]]:
+    """(function, arguments, what the case is about): the boundaries of the three
+    functions.  Every expected answer is worked by hand below (and is also what the sympy
+    oracle gives, which the test compares with)."""
+    up, down = [0.0, 1.0], [0.0, -1.0]
+    cases = []
+
+    def add(function, args, why):
+        cases.append((function, args, why))
+
+    ball = plain.body(plain.circle((0, 0), 0.5), mass=1.0, position=(0.0, 0.5), velocity=(0.0, -3.0))
+    ground, ball = ground_and(ball)
+    # A 1 kg ball hits the ground at 3 m/s through its centre, e = 0.5: k = 1/1 = 1 1/kg exactly,
+    # j = 1.5 * 3 / 1 = 4.5 N s.
+    add("normal_impulse_magnitude", (ground, ball, [0.0, 0.0], up, 0.5), "k = 1 1/kg exactly")
+    # The static body on side B: the ball A above static ground B, n = (0, -1) from A to B,
+    # v_n = (0 - (-3)) * -1 = -3 m/s, k = 1: j = 2 * 3 / 1 = 6 N s (e = 1).
+    add("normal_impulse_magnitude", (ball, ground, [0.0, 0.0], down, 1.0), "static body B, k = 1 1/kg")
+    # Two static bodies closing in: a static platform A, moved by a script up at 2 m/s, under a
+    # static crate B: v_n = -2 m/s but k = 0: no impulse can move them, j = 0.
+    platform = {**ground, "velocity": [0.0, 2.0]}
+    crate = plain.body(plain.obb((0, 0), (0.5, 0.5), 0.0), mass=2.0, position=(0.0, 0.5), is_static=True,
+                       restitution=0.5, friction=0.5)
+    add("normal_impulse_magnitude", (platform, crate, [0.0, 0.0], up, 0.5), "two static bodies closing in")
+    add("resolve_collision", (platform, crate, plain.contact(up, 0.0, [(0.0, 0.0)]), 0.5, 0.5),
+        "two static bodies closing in: nothing moves")
+
+    # A 1 kg box with fixed rotation lands sliding on the ground at one point below its centre:
+    # k = k_t = 1 1/kg exactly (no angular terms).  e = 0.5: j = 1.5 * 3 = 4.5 N s, v_y' = 1.5 m/s;
+    # t = (n_y, -n_x) = (1, 0), the impulse that stops v_t = v_x is j_t = -v_x, clamped to
+    # |j_t| <= mu j.
+    slider = plain.body(plain.obb((0, 0), (0.5, 0.5), 0.0), mass=1.0, position=(0.0, 0.5), velocity=(2.0, -3.0),
+                        fixed_rotation=True)
+    under = plain.contact(up, 0.0, [(0.0, 0.0)])
+    # mu = 1: j_t = -2 (inside the limit 4.5): v' = (0, 1.5).
+    add("resolve_collision", (ground, slider, under, 0.5, 1.0), "mu = 1, k_t = 1 1/kg, sticks")
+    # v_x = 4.5 m/s: j_t = -4.5 = -mu j exactly, at the Coulomb limit: v' = (0, 1.5).
+    add("resolve_collision", (ground, {**slider, "velocity": [4.5, -3.0]}, under, 0.5, 1.0),
+        "exactly at the Coulomb limit |j_t| = mu j")
+    add("resolve_collision", (ground, {**slider, "velocity": [-4.5, -3.0]}, under, 0.5, 1.0),
+        "exactly at the Coulomb limit |j_t| = mu j, sliding the other way")
+    # v_x = 6 m/s, mu = 0.5: the limit 2.25 N s clamps j_t = -2.25: v' = (3.75, 1.5).
+    add("resolve_collision", (ground, {**slider, "velocity": [6.0, -3.0]}, under, 0.5, 0.5),
+        "beyond the Coulomb limit: clamped to -mu j")
+    # Static body B: the slider A above static ground B, n = (0, -1), t = (-1, 0); e = 1: j = 6 N s,
+    # v_t = (0 - 2) * -1 = 2 m/s, j_t = -2 (limit 0.5 * 6 = 3): A gets -(j n + j_t t) = (-2, 6):
+    # v_A' = (0, 3).
+    add("resolve_collision", (slider, ground, plain.contact(down, 0.0, [(0.0, 0.0)]), 1.0, 0.5),
+        "static body B")
+
+    # Infinite friction (mu = inf: no sliding at all).  A 1 kg disc r = 0.5 m (I = 0.125 kg m^2)
+    # lands at (2, -3) m/s: j = 4.5 N s (r x n = 0), then j_t = -v_t / k_t with
+    # k_t = 1 + 0.5^2 / 0.125 = 3 1/kg: j_t = -2/3 N s, v' = (4/3, 1.5); r = (0, -0.5),
+    # r x P = -(-0.5)(-2/3) = -1/3, w' = -1/3 / 0.125 = -8/3 rad/s: the contact point rolls
+    # (v + w x r = 4/3 - 4/3 = 0 along t).
+    disc = {**ball, "velocity": [2.0, -3.0]}
+    add("resolve_collision", (ground, disc, under, 0.5, math.inf), "mu = inf: the point sticks")
+    # Separating (the disc moves up and sideways): j = 0, so no friction either, even with
+    # mu = inf (mu j = inf * 0 is not a number: skip points without normal impulse).
+    add("resolve_collision", (ground, {**disc, "velocity": [2.0, 1.0], "angular_velocity": 1.0}, under, 0.5,
+                              math.inf), "mu = inf, separating: nothing happens")
+    # Sliding flat along the ground, v_n = 0 exactly at both corners: nothing happens.
+    box = plain.body(plain.obb((0, 0), (0.5, 0.5), 0.0), mass=1.0, position=(0.0, 0.5), velocity=(2.0, 0.0))
+    corners = plain.contact(up, 0.0, [(-0.5, 0.0), (0.5, 0.0)])
+    add("resolve_collision", (ground, box, corners, 0.5, math.inf), "mu = inf, v_n = 0 exactly: nothing happens")
+    # Landing tilted by a spin w = 6 rad/s: the left corner approaches (v_n = -1 - 6 * 0.5 = -4 m/s),
+    # the right one leaves (v_n = -1 + 3 = +2 m/s).  I = 1/6 kg m^2, K = [[2.5, -0.5], [-0.5, 2.5]]:
+    # the left corner alone takes 1.5 * 4 / 2.5 = 2.4 N s, which leaves the right one at
+    # 2 - 0.5 * 2.4 = +0.8 m/s: it gets neither a normal nor a friction impulse (sympy for the rest).
+    add("resolve_collision", (ground, {**box, "velocity": [0.4, -1.0], "angular_velocity": 6.0}, corners, 0.5,
+                              math.inf), "mu = inf, one corner leaving")
+
+    # Positional correction around the slop.  1 kg and 3 kg discs along x: the light one takes
+    # 3/4 of the correction.  depth - slop = 1.25 - 0.25 = 1 m exactly, percent 0.5: the bodies
+    # move 0.5 m apart, A by -0.375 m, B by +0.125 m.
+    light = plain.body(plain.circle((0, 0), 0.5), mass=1.0, position=(0.0, 0.0))
+    heavy = plain.body(plain.circle((0, 0), 0.5), mass=3.0, position=(0.5, 0.0))
+    along_x = [1.0, 0.0]
+    add("correct_positions", (light, heavy, along_x, 1.25, 0.5, 0.25), "depth - slop = 1 m exactly")
+    # Static A: B alone moves the whole percent * (depth - slop) = 1 * (2 - 1) = 1 m.
+    add("correct_positions", ({**light, "is_static": True}, heavy, along_x, 2.0, 1.0, 1.0),
+        "static A, depth - slop = 1 m exactly")
+    # Static B: A alone moves -percent * (depth - slop) = -0.8 * (1.5 - 0.5) = -0.8 m.
+    add("correct_positions", (light, {**heavy, "is_static": True}, along_x, 1.5, 0.8, 0.5),
+        "static B, depth - slop = 1 m exactly")
+    # depth exactly the slop (0.5 m), and depth = slop = 0: nothing moves.
+    add("correct_positions", (light, heavy, along_x, 0.5, 0.8, 0.5), "depth exactly equal to the slop")
+    add("correct_positions", (light, heavy, along_x, 0.0, 1.0, 0.0), "depth = slop = 0")
+    # Just beyond the default slop: 0.8 * (0.011 - 0.01) = 0.0008 m in all, A -0.0006 m, B +0.0002 m.
+    add("correct_positions", (light, heavy, along_x, 0.011), "depth just beyond the default slop")
+    return cases
+
+
+def limit_problem(case: tuple, result) -> str | None:
+    function, args, why = case
+    if not result.ok:
+        return f"raised: {result.message.strip()[-300:]}"
+    if function == "normal_impulse_magnitude":
+        found = magnitude_problem(args, result.value)
+    elif function == "resolve_collision":
+        found = resolve_problem(args, (result.value, result.args_after))
+        if found and math.isinf(args[4]):
+            found += ("; with mu = inf the friction impulse is the whole sticking impulse -v_t / k_t, and a point "
+                      "with j_i = 0 gets none (skip it: inf * 0 is not a number)")
+    else:
+        found = correction_problem(args, (result.value, result.args_after))
+    return found and f"{found} [{why}]"
+
+
+def describe_limit(case: tuple) -> str:
+    function, args, _ = case
+    if function == "normal_impulse_magnitude":
+        return f"normal_impulse_magnitude{show_inputs(*args)}"
+    return describe_resolve(args) if function == "resolve_collision" else describe_correction(args)
+
+
+@pytest.mark.points(1)
+@pytest.mark.title("Limits: static pairs, k = 1, the Coulomb limit, infinite friction, the slop")
+def test_limits(student):
+    """Boundaries worked by hand: two static bodies, k = 1, |j_t| = mu j, mu = inf, depth - slop = 0 or 1"""
+    cases = limit_cases()
+    results = []
+    for function, args, _ in cases:
+        module = CORRECTION if function == "correct_positions" else MODULE
+        result = student.raw(module, function, *args)
+        if result.status in ("not_implemented", "timeout", "crashed"):
+            student.value_of(result, f"{module}.{function}")  # stops the test with that status
+        results.append(result)
+    check_cases(zip(cases, results), lambda cr: limit_problem(cr[0], cr[1]), "limit cases",
+                describe=lambda cr: describe_limit(cr[0]))
 
 
 # Any case (Hypothesis) ----------------------------------------------------------------------------

@@ -329,8 +329,16 @@ def structure_cases(seed: int) -> list[tuple]:
     """(boxes, bounds, max_bodies_per_node, min_node_area, max_depth, note) scenes."""
     rng = np.random.default_rng(seed)
     # Small scenes first: the first broken one is the one shown.
+    # Boxes 0-3 each touch one splitting line from one side and lie strictly on one side
+    # of the other line: child_holding gives them no child, so they stay where the line is.
+    one_line = np.array([[1, 0.5, 2, 1.5], [2, 2.5, 3, 3.5], [0.5, 1, 1.5, 2], [2.5, 2, 3.5, 3],
+                         [0.2, 0.2, 0.4, 0.4], [3.6, 3.6, 3.8, 3.8]], dtype=float)
     out = [(np.array([[0, 0, 1, 1], [1, 0, 2, 1], [0, 1, 1, 2], [1, 1, 2, 2], [0.2, 0.2, 0.4, 0.4]], dtype=float),
             [0.0, 0.0, 2.0, 2.0], 1, 0.0, 16, "boxes on the root's splitting lines stay at the root"),
+           (one_line, [0.0, 0.0, 4.0, 4.0], 1, 0.0, 16,
+            "boxes ending or starting on one splitting line of the root (x = 2 or y = 2) stay at the root"),
+           (np.vstack([one_line, [[6, 6, 7, 7]]]), [0.0, 0.0, 8.0, 8.0], 1, 0.0, 16,
+            "boxes ending or starting on a splitting line of the quarter (0, 0, 4, 4) stay in that quarter"),
            (np.array([[0.3, 0.3, 0.3, 0.3]] * 6 + [[0.0, 0.0, 4.0, 4.0]]), None, 2, 0.0, 5,
             "many bodies at one point: the depth rule stops splitting"),
            (random_aabbs(rng, 12, world=8.0, size=0.5), [-4.0, -4.0, 4.0, 4.0], 2, 0.0, 16,

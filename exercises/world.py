@@ -108,10 +108,12 @@ class WorldSettings:
         Switches of the contact solver.
     backend : str
         ``"python"``: every stage in readable Python and numpy (the teaching text);
-        ``"numba"``: the solver kernel (contacts and joints) compiled by numba
-        (:mod:`solutions.solver.kernel_numba`), tested equal to the readable loop to
-        1e-12 on every hard scene.  Not a setting of the physics: both give the same
-        motion, to rounding.
+        ``"numba"``: the compiled twins of the solver kernel (contacts and joints,
+        :mod:`solutions.solver.kernel_numba`), of the numpy grid broad phase
+        (:mod:`solutions.broadphase.grid_numba`) and of the box-pair manifolds of the
+        soft step (:mod:`solutions.narrowphase.box_pairs_numba`), each tested equal to
+        its readable version, and the world to 1e-12 on every hard scene.  Not a
+        setting of the physics: both give the same motion, to rounding.
     """
 
     gravity: tuple[float, float] = (0.0, -9.81)
@@ -273,6 +275,10 @@ class World:
                 pairs = sorted(pairs_uniform_grid(aabbs, cell_size=suggest_cell_size(aabbs)))
             elif method == "quadtree":
                 pairs = sorted(pairs_quadtree(aabbs))
+            elif self.settings.backend == "numba":       # the numpy grid's compiled twin
+                from .broadphase.grid_numba import pairs_grid_numba
+
+                pairs = [tuple(p) for p in pairs_grid_numba(aabbs).tolist()]
             else:
                 pairs = [tuple(p) for p in pairs_grid_numpy(aabbs).tolist()]
         static = [b.is_static for b in self.bodies]
@@ -303,10 +309,14 @@ class World:
             boxes = []                     # numpy's fixed cost would exceed the loop's
         batched = set(boxes)
         if boxes:
+            if self.settings.backend == "numba":   # the numpy version's compiled twin, equal to it
+                from .narrowphase.box_pairs_numba import speculative_box_manifolds_numba as box_manifolds
+            else:
+                box_manifolds = speculative_box_manifolds
             a = [box_pose(shapes[pairs[k][0]]) for k in boxes]
             b = [box_pose(shapes[pairs[k][1]]) for k in boxes]
-            batch = speculative_box_manifolds(*(np.array(column) for column in zip(*a)),
-                                              *(np.array(column) for column in zip(*b)), SPECULATIVE_MARGIN)
+            batch = box_manifolds(*(np.array(column) for column in zip(*a)),
+                                  *(np.array(column) for column in zip(*b)), SPECULATIVE_MARGIN)
             for k, result in zip(boxes, manifolds_as_contacts(batch)):
                 found[k] = result
         for k, (i, j) in enumerate(pairs):

@@ -40,6 +40,7 @@ import math
 import numpy as np
 
 from .constraint_rows import ConstraintRows
+from .contact_point import ContactPoint, apply_friction_impulse, apply_normal_impulse
 
 
 def block_normal_impulses(k11: float, k12: float, k22: float, b1: float, b2: float) -> tuple[float, float]:
@@ -134,6 +135,11 @@ def solve_constraints(velocity: np.ndarray, rows: ConstraintRows, iterations: in
     normal, tangent = normal_total.tolist(), tangent_total.tolist()
     target, mass_scale, impulse_scale = target.tolist(), mass_scale.tolist(), impulse_scale.tolist()
     normal_change = [0.0] * len(normal)   # this sweep's normal increments (friction bound without accumulation)
+    points: list[ContactPoint | None] = [None] * len(normal)   # each row seen as one contact point
+    for g in range(len(first_of)):
+        for k in range(first_of[g], first_of[g] + count_of[g]):
+            points[k] = ContactPoint(nx_of[g], ny_of[g], rn_a[k], rn_b[k], rt_a[k], rt_b[k], ima_of[g], imb_of[g],
+                                     iia_of[g], iib_of[g], mass_normal[k], mass_tangent[k], mu_of[k], lower_of[k])
 
     for _ in range(iterations):
         for g in range(len(first_of)):
@@ -149,17 +155,16 @@ def solve_constraints(velocity: np.ndarray, rows: ConstraintRows, iterations: in
                 mu = mu_of[k]
                 if not use_friction or mu == 0.0:
                     return vxa, vya, wa, vxb, vyb, wb
+                if accumulate:
+                    (vxa, vya, wa), (vxb, vyb, wb), tangent[k] = apply_friction_impulse(
+                        (vxa, vya, wa), (vxb, vyb, wb), points[k], normal[k], tangent[k])
+                    return vxa, vya, wa, vxb, vyb, wb
+                # Clamped increments: bounded by this sweep's normal increment, not the total.
                 tangent_velocity = (vxb - vxa) * ny - (vyb - vya) * nx + wb * rt_b[k] - wa * rt_a[k]
                 change = -mass_tangent[k] * tangent_velocity
-                if accumulate:
-                    bound = mu * normal[k]
-                    old = tangent[k]
-                    tangent[k] = min(max(old + change, -bound), bound)
-                    change = tangent[k] - old
-                else:
-                    bound = mu * normal_change[k]
-                    change = min(max(change, -bound), bound)
-                    tangent[k] += change
+                bound = mu * normal_change[k]
+                change = min(max(change, -bound), bound)
+                tangent[k] += change
                 return (vxa - ima * change * ny, vya + ima * change * nx, wa - iia * rt_a[k] * change,
                         vxb + imb * change * ny, vyb - imb * change * nx, wb + iib * rt_b[k] * change)
 
@@ -192,16 +197,19 @@ def solve_constraints(velocity: np.ndarray, rows: ConstraintRows, iterations: in
                 wb += iib * (rn_b[k1] * change1 + rn_b[k2] * change2)
             else:
                 for k in group:
-                    # v_n = (v_B + w_B x r_B - v_A - w_A x r_A) . n
-                    normal_velocity = (vxb - vxa) * nx + (vyb - vya) * ny + wb * rn_b[k] - wa * rn_a[k]
                     old = normal[k]
+                    if accumulate:   # the exercise: solutions/solver/contact_point.py
+                        (vxa, vya, wa), (vxb, vyb, wb), normal[k] = apply_normal_impulse(
+                            (vxa, vya, wa), (vxb, vyb, wb), points[k], old, target[k], mass_scale[k],
+                            impulse_scale[k])
+                        normal_change[k] = normal[k] - old
+                        continue
+                    # Clamped increments (the classic mistake, kept as a switch): v_n as above,
+                    # v_n = (v_B + w_B x r_B - v_A - w_A x r_A) . n, then each increment >= 0.
+                    normal_velocity = (vxb - vxa) * nx + (vyb - vya) * ny + wb * rn_b[k] - wa * rn_a[k]
                     change = mass_normal[k] * mass_scale[k] * (target[k] - normal_velocity) - impulse_scale[k] * old
-                    if accumulate:
-                        normal[k] = max(old + change, lower_of[k])
-                        change = normal[k] - old
-                    else:
-                        change = max(change, lower_of[k])
-                        normal[k] += change
+                    change = max(change, lower_of[k])
+                    normal[k] += change
                     normal_change[k] = change
                     vxa -= ima * change * nx
                     vya -= ima * change * ny
@@ -209,7 +217,7 @@ def solve_constraints(velocity: np.ndarray, rows: ConstraintRows, iterations: in
                     vxb += imb * change * nx
                     vyb += imb * change * ny
                     wb += iib * rn_b[k] * change
-                    if not accumulate and not friction_first:   # each point's friction follows its normal
+                    if not friction_first:   # each point's friction follows its normal
                         vxa, vya, wa, vxb, vyb, wb = friction(k, vxa, vya, wa, vxb, vyb, wb)
             if not friction_first and (accumulate or block):
                 for k in group:

@@ -43,7 +43,7 @@ import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
-REPO_ROOT = Path(__file__).resolve().parent.parent
+REPO_ROOT = Path(__file__).resolve().parent.parent.parent
 SOLUTIONS_DIR = REPO_ROOT / "solutions"
 EXERCISES_DIR = REPO_ROOT / "exercises"
 PACKAGE = "exercises"
@@ -1744,8 +1744,8 @@ def grade_probe(tests, out_dir: Path, slot: int = 0,
     the other, so what is printed between two tests' ends belongs to the later one.
     The results are the reference's own (the probe only prints): every test passes.
     """
-    from .run import run_tests
-    from .sandbox import Sandbox
+    from ..run import run_tests
+    from ..sandbox import Sandbox
 
     folder, codes = build_probe(out_dir)
     printed: list[str] = []
@@ -1794,7 +1794,7 @@ def add_example_class_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main_example_class(args: argparse.Namespace) -> int:
-    from .spec import load_spec
+    from ..spec import load_spec
 
     tests = load_spec()
     total = sum(t.points for t in tests)
@@ -1823,7 +1823,7 @@ def grade_table(tests, folders: dict[str, Path], all_tests: bool = False, slot: 
     import tempfile
     import time
 
-    from .run import run_tests
+    from ..run import run_tests
 
     total = sum(t.points for t in tests)
     reached = None

@@ -24,9 +24,10 @@ and clamps the accumulated impulse ``P`` to ``[lower, inf)``; a friction row app
 given to B along ``n`` (or ``t = (n_y, -n_x)``) and the opposite to A, with their
 torques ``r x P``.
 
-Order within a group: with ``friction_first`` (Box2D v2, box2d-lite: normal impulses
-have the last word), friction rows, then normal rows; else (Box2D v3) the normal rows
-and then friction.  A two-point group marked ``block`` solves its normal rows together
+Order within a group: with ``friction_first`` (Box2D v2: normal impulses have the last
+word), friction rows, then normal rows; else (Box2D v3) the normal rows and then
+friction.  (box2d-lite visits each point's normal and then its friction; with
+``accumulate=False`` the kernel does that.)  A two-point group marked ``block`` solves its normal rows together
 as one 2x2 complementarity problem (:func:`block_normal_impulses`).  With
 ``accumulate=False`` (a teaching switch: the classic bug of clamping each increment
 instead of the total) each increment is clamped, and each point's friction follows

@@ -272,6 +272,21 @@ def random_face_circle(rng: np.random.Generator, apart: bool, spread: float = 2.
                             radius, float(distance), BOX_KINDS[1 + rng.integers(2)])
 
 
+def random_outside_polygon_circle(rng: np.random.Generator, spread: float = 1.0) -> tuple:
+    """A circle whose centre is just outside a random convex polygon (3 to 7 vertices), by
+    10 % to 90 % of its radius beyond the polygon's extent in a random direction: often
+    in front of several faces at once, of which only the nearest holds the contact."""
+    poly = plain.polygon(np.asarray(_random_polygon_vertices(rng, float(rng.uniform(0.5, 1.2))))
+                         + rng.uniform(-spread, spread, 2))
+    v = np.asarray(poly["vertices"], dtype=float)
+    middle = v.mean(axis=0)
+    angle = rng.uniform(0, 2 * math.pi)
+    u = np.array([math.cos(angle), math.sin(angle)])
+    radius = float(rng.uniform(0.2, 0.8))
+    reach = float(np.max((v - middle) @ u))
+    return plain.circle(middle + u * (reach + radius * rng.uniform(0.1, 0.9)), radius), poly
+
+
 def random_inside_circle(rng: np.random.Generator, spread: float = 2.0, offset=(0.0, 0.0)) -> tuple:
     """Seeded :func:`inside_circle_pair` whose nearest face is clear."""
     while True:

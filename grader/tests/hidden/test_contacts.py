@@ -162,7 +162,11 @@ def test_degenerate_shapes(student):
             (point(0.5, 0.25), plain.aabb((0, 0), (1, 1))), (plain.circle((1, 1.2), 0.3), segment),
             (plain.circle((1.25, 0.5), 0.5), plain.aabb((0, 0), (1, 1))), (plain.circle((2, 2), 1.5), plain.aabb((0, 0), (1, 1)))],
         (POLYGONS, "collide_polygon_polygon"): [(segment, plain.obb((1, 1.1), (0.3, 0.3), 0.6)),
-                                                (plain.obb((0, 0), (1, 1), 0.0), plain.obb((0.5, 0.9), (0.0, 0.2), 0.0))],
+                                                (plain.obb((0, 0), (1, 1), 0.0), plain.obb((0.5, 0.9), (0.0, 0.2), 0.0)),
+                                                # Two boxes of zero size at the origin: every coordinate
+                                                # is 0, so is the roundoff allowance (scale 0).
+                                                (plain.obb((0, 0), (0, 0), 0.0), plain.obb((0, 0), (0, 0), 0.0)),
+                                                (plain.obb((0, 0), (0, 0), 0.0), plain.obb((0, 0), (0, 0), 0.7))],
     }
     everything = []
     for (module, function), pairs in groups.items():
@@ -172,3 +176,36 @@ def test_degenerate_shapes(student):
                 describe=lambda item: call_text(item[0], item[1], item[2]),
                 figure_of=lambda item: pair_figure(item[1], item[2], f"{item[0]}: shapes of zero size", item[3],
                                                    item[4]))
+
+
+#: Pairs where the reference face rule or the roundoff allowance decides, with a note.
+#: Allowances scale with the largest vertex coordinate (KEEP_POINT_TOL, 1e-12 m per m):
+#: about 1e-6 m for shapes 1e6 m from the origin.
+WIDE_GROUND = plain.polygon([(-1e6, -1), (1e6, -1), (1e6, 0), (-1e6, 0)])
+EDGE_CASES = [
+    # B's best face better than A's by 1 % (within the 2 % that lets A keep the reference
+    # role), but A's side planes cut off all of B's incident face: B's face is used.
+    (plain.polygon([(0.56, -0.18), (-0.3, 0.42), (-0.64, 0.19), (-0.74, -0.35), (-0.53, -0.63), (-0.05, -0.82)]),
+     plain.polygon([(0.47, -0.45), (0.27, -0.18), (-0.23, 0.41), (-1.72, -0.03), (-2.0, -1.17), (-0.9, -2.02)]),
+     "A's manifold is empty: the reference face is B's"),
+    # A crate 0.01 m into a ground 2e6 m wide, its bottom face tilted so that its right end
+    # is 1e-7 m above the ground: within the allowance, a second point of depth 0.
+    (WIDE_GROUND, plain.polygon([(-0.5, -0.01), (0.5, 1e-7), (0.5, 1), (-0.5, 1)]),
+     "coordinates up to 1e6 m: a point 1e-7 m above the reference face is kept"),
+    (plain.polygon([(-0.5, -0.01), (0.5, 1e-7), (0.5, 1), (-0.5, 1)]), WIDE_GROUND,
+     "coordinates up to 1e6 m: a point 1e-7 m above the reference face is kept"),
+    # A crate over the ground's right end x = 1e6: its deepest vertex, 0.01 m deep, 1e-5 m
+    # beyond the end; its bottom face rises by 0.05 per m.  The side plane cuts 5e-7 m of
+    # depth off the point (within the allowance, A keeps the role: B's bottom face is only
+    # 0.13 % better); the contact's depth is still A's face's penetration, 0.01.
+    (WIDE_GROUND, plain.polygon([(1e6 + 1e-5 - 1, 0.04), (1e6 + 1e-5, -0.01), (1e6 + 1e-5, 1), (1e6 + 1e-5 - 1, 1)]),
+     "the deepest vertex cut off by less than the allowance: depth = the face's penetration"),
+]
+
+
+@pytest.mark.points(1)
+@pytest.mark.visibility("after_due_date")
+def test_reference_face_edge_cases(student):
+    """Contacts: the reference face when A's manifold is empty, roundoff allowances 1e6 m from the origin"""
+    batch = [(a, b, reference_contact(a, b), note) for a, b, note in EDGE_CASES]
+    check_contacts(student, POLYGONS, "collide_polygon_polygon", batch, "reference face edge cases")

@@ -7,10 +7,15 @@ from literals (touching counts as colliding, with depth 0).  Every returned fiel
 compared: the normal (unit, finite, A to B), the depth, the number of points and each
 point (:func:`grader.oracles.narrowphase_answers.contact_problem`).
 
-Left out, because the course leaves the answer free there: pairs within 1e-7 m of
-touching by rounding only, polygon pairs whose two best faces are penetrated almost
-equally (the course keeps A's face within 2 %), circles whose centre is inside a box
-almost as near to two faces.
+Left out of the random batches, because pymunk does not follow the course's rule there
+or the answer is free: pairs within 1e-7 m of touching by rounding only, polygon pairs
+whose two best faces are penetrated almost equally (the course keeps A's face within
+2 %), circles whose centre is inside a box almost as near to two faces.  The course's
+rules for the reference face (the first face of A wins an exact tie, A keeps the role
+within 2 % unless its side planes cut off the deepest point) are tested on pairs worked
+out by hand, and so are the two clipping steps, called directly
+(``clip_segment_to_half_plane``, ``reference_face_manifold``, feature ids included), and
+boxes of zero width (segments and points).
 """
 from __future__ import annotations
 
@@ -21,6 +26,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from grader.compare import as_number, as_vector, show
 from grader.credit import check_cases, fail
 from grader.shrink import smallest_failure
 from grader.oracles import narrowphase_cases as cases
@@ -114,6 +120,28 @@ def coincident_centres(a: dict, b: dict):
     return problem
 
 
+#: Circles against boxes of zero width, worked out by hand: (circle, box, normal, depth, point).  Such a
+#: box is a segment (or a point) with all four faces: two long ones on the same line with
+#: opposite normals and two of zero length at its ends.  Only the faces the centre is
+#: outside of (s_i >= 0) hold the closest point.
+SEGMENT = plain.obb((0, 0), (1, 0), 0.0)   # from (-1, 0) to (1, 0)
+ZERO_SIZE_BOXES = [
+    # Off the end (1, 0): 0.5 m from it along (0.3, 0.4) / 0.5; depth 0.6 - 0.5; the point
+    # halfway between (1, 0) and the circle's deepest point (1.3, 0.4) - 0.6 (0.6, 0.8).
+    (plain.circle((1.3, 0.4), 0.6), SEGMENT, (-0.6, -0.8), 0.1, (0.97, -0.04)),
+    (plain.circle((-1.3, -0.4), 0.6), plain.aabb((-1, 0), (1, 0)), (0.6, 0.8), 0.1, (-0.97, 0.04)),
+    # On the segment's line, 0.5 m beyond its end: normal (-1, 0), depth 1 - 0.5, the point
+    # halfway between (1, 0) and (0.5, 0).
+    (plain.circle((1.5, 0), 1.0), SEGMENT, (-1, 0), 0.5, (0.75, 0)),
+    # Above the middle: only the upper face (normal +y) faces the centre; the lower one
+    # is the same segment seen from below.  Depth 0.5 - 0.3; point between (0.5, 0) and (0.5, -0.2).
+    (plain.circle((0.5, 0.3), 0.5), SEGMENT, (0, -1), 0.2, (0.5, -0.1)),
+    (plain.circle((0, 1.5), 0.6), plain.obb((0, 0), (0, 1), 0.0), (0, -1), 0.1, (0, 0.95)),
+    # A box of zero size at (1, 1): the centre is 0.5 m away along (0.6, 0.8).
+    (plain.circle((1.3, 1.4), 0.6), plain.obb((1, 1), (0, 0), 0.0), (-0.6, -0.8), 0.1, (0.97, 0.96)),
+]
+
+
 # The ported tests ----------------------------------------------------------------------------------
 @pytest.mark.points(2)
 @pytest.mark.partial_credit
@@ -153,6 +181,8 @@ def test_circle_polygon(student):
                          "overlapping a corner: the normal is along the centre-to-corner line")
     batch += with_pymunk([cases.random_corner_circle(rng, apart=True) for _ in range(5)], "apart, off a corner")
     batch += with_pymunk([cases.random_face_circle(rng, apart=k % 4 == 0) for k in range(20)], "next to a face")
+    batch += with_pymunk([cases.random_outside_polygon_circle(rng) for _ in range(30)],
+                         "just outside a polygon: the nearest of the faces in front of the centre")
     batch += with_pymunk([cases.random_inside_circle(rng) for _ in range(15)],
                          "centre inside the box: it leaves through the nearest face")
     batch += with_pymunk(cases.far_pairs(rng, 10, LEFT, lambda r: (rc.random_circle(r, 0.8), rc.random_obb(r, 0.8))),
@@ -168,6 +198,8 @@ def test_circle_polygon(student):
     batch.append((plain.circle((0.1, 0.2), 0.3), plain.obb((0, 0), (1, 1), 0.0), plain.contact((0, -1), 1.1, [(0.1, 0.45)]),
                   "centre inside the box"))
     batch += touching(cases.random_touching_circle_box(rng) for _ in range(8))
+    batch += [(circle, box, plain.contact(n, d, [p]), "a box of zero height (a segment) or of zero size (a point)")
+              for circle, box, n, d, p in ZERO_SIZE_BOXES]
     check_contacts(student, CIRCLE_POLYGON, "collide_circle_polygon", batch, "circles against boxes and polygons",
                    st.tuples(rc.circles, rc.obbs))
 
@@ -209,6 +241,8 @@ def test_aabb_contacts(student):
     batch.append((plain.aabb((0, 0), (2, 1)), plain.aabb((1, 0.5), (3, 2)), plain.contact((0, 1), 0.5, [(1, 0.75), (2, 0.75)]),
                   "docstring example"))
     batch += touching(cases.random_touching_boxes(rng, kinds=("aabb", "aabb")) for k in range(8))
+    batch += [(a, b, plain.contact(n, 0.0, [p]), "corner to corner: one point, the first tied face of A")
+              for a, b, n, p in corners_touching(("aabb", "aabb"))]
     check_contacts(student, AABBS, "collide_aabb_aabb", batch, "axis-aligned boxes")
 
 
@@ -244,6 +278,217 @@ def test_face_face(student):
     if not all(len(want["points"]) == 2 for _, _, want, _ in batch):
         raise RuntimeError("the face-to-face cases must all have two contact points (a problem of the test)")
     check_contacts(student, POLYGONS, "collide_polygon_polygon", batch, "boxes face to face")
+
+
+def corners_touching(kinds=("obb", "polygon")) -> list[tuple]:
+    """Boxes touching corner to corner exactly (multiples of 1/8 m): (A, B, normal, point).
+
+    Two faces of A have separation 0 there; the first of them in A's numbering (0 faces
+    -y, 1 +x, 2 +y, 3 -x) is the reference face (max_face_separation: the first one on an
+    exact tie; and B's faces, tied as well, are not clearly better): B up and to the right
+    of A gives face 1, up and left face 2, down and left or right face 0.
+    """
+    a = cases.box((0.5, -0.25), (1.0, 0.5), 0.0, kinds[0])       # corners x = -0.5, 1.5; y = -0.75, 0.25
+    out = []
+    for center_b, normal, corner in (((2.0, 0.75), (1, 0), (1.5, 0.25)), ((-1.0, 0.75), (0, 1), (-0.5, 0.25)),
+                                     ((-1.0, -1.25), (0, -1), (-0.5, -0.75)), ((2.0, -1.25), (0, -1), (1.5, -0.75))):
+        out.append((a, cases.box(center_b, (0.5, 0.5), 0.0, kinds[1]), normal, corner))
+    return out
+
+
+def reference_face_cases() -> list[tuple]:
+    """(A, B, expected contact, note) for the choice of the reference face, worked out by hand."""
+    out = [(a, b, plain.contact(n, 0.0, [p]), "corner to corner: one point, the first tied face of A")
+           for kinds in (("obb", "obb"), ("polygon", "obb"), ("obb", "polygon")) for a, b, n, p in corners_touching(kinds)]
+    ground = plain.aabb((-1, -2), (1, 0))                         # top face y = 0 (face 2)
+    # B: a 2 x 2 square turned so that its bottom face runs along (4, 3) / 5 from its lowest
+    # vertex p = (-0.84, -0.5).  Face separations: A's top face -0.5 (p is 0.5 m deep); B's
+    # bottom face (normal (0.6, -0.8)) -0.496, at A's corner (-1, 0): 0.6 (-0.16) - 0.8 (0.5).
+    # B's face is better by 0.8 % only: within REFERENCE_FACE_RELATIVE_TOL (2 %) A keeps the
+    # reference role, since its manifold holds p: normal (0, 1), depth 0.5, one point (B's
+    # vertex (0.76, 0.7) is above y = 0) halfway between p and (-0.84, 0).
+    tilted = plain.polygon([(-0.84, -0.5), (0.76, 0.7), (-0.44, 2.3), (-2.04, 1.1)])
+    within = "B's face better by less than 2 %: A keeps the reference role"
+    out.append((ground, tilted, plain.contact((0, 1), 0.5, [(-0.84, -0.25)]), within))
+    # The same pair seen from B: B's bottom face is the least penetrated (-0.496), normal
+    # (0.6, -0.8); the incident face is A's top face, whose vertex (-1, 0) is 0.496 deep and
+    # (1, 0) above it; the point is (-1, 0) + 0.248 (0.6, -0.8).
+    out.append((tilted, ground, plain.contact((0.6, -0.8), 0.496, [(-0.8512, -0.1984)]), "the least penetrated face"))
+    # B a 3 x 2 rectangle whose bottom face runs along (399, 40) / 401 from p = (-1.04, -0.5),
+    # just left of A's top face: A's face -0.5, B's bottom face -(0.5 - 0.04 tan) cos =
+    # -197.9 / 401 (1.3 % better).  A's side plane x = -1 cuts p away, so A's manifold misses
+    # the deepest point: B's face is the reference, normal -(40, -399) / 401 from A to B, depth
+    # 197.9 / 401; both of A's top corners are below it, each moved halfway to it.
+    c, s = 399 / 401, 40 / 401
+    p = np.array([-1.04, -0.5])
+    along, up = np.array([c, s]), np.array([-s, c])
+    steep = plain.polygon([p, p + 3 * along, p + 3 * along + 2 * up, p + 2 * up])
+    n_b = np.array([s, -c])
+    points = [w - 0.5 * float(n_b @ (w - p)) * n_b for w in (np.array([-1.0, 0.0]), np.array([1.0, 0.0]))]
+    out.append((ground, steep, plain.contact(-n_b, 197.9 / 401, points),
+                "B's face better by less than 2 %, but A's side plane cuts off B's deepest vertex: B's face"))
+    out.append((steep, ground, plain.contact(n_b, 197.9 / 401, points), "the least penetrated face"))
+    return out
+
+
+@pytest.mark.points(1)
+def test_reference_face_rules(student):
+    """Polygons: which face is the reference (ties, the 2 % preference for A)"""
+    check_contacts(student, POLYGONS, "collide_polygon_polygon", reference_face_cases(), "reference face choices")
+
+
+# The clipping steps, called directly ---------------------------------------------------------------
+def plain_id(value):
+    """A feature id as plain data: tuples become lists (as they cross the sandbox)."""
+    return [plain_id(v) for v in value] if isinstance(value, (list, tuple)) else value
+
+
+#: (segment [(point, id)], plane normal n, offset, tolerance, expected [(point, id)]), by hand:
+#: keep Dot(n, x) <= offset + tolerance; a crossing is added only when exactly one end is
+#: kept and the ends lie strictly on opposite sides; it comes last and keeps the id of the
+#: end it replaces.
+CLIP_CASES = [
+    # Docstring example: x <= 3 cuts (4, 0) at (3, 0).
+    ([((0, 0), "v0"), ((4, 0), "v1")], (1, 0), 3.0, 0.0, [((0, 0), "v0"), ((3, 0), "v1")]),
+    # The first end is cut: the kept end first, then the crossing with the first end's id.
+    ([((4, 0), "v0"), ((0, 0), "v1")], (1, 0), 3.0, 0.0, [((0, 0), "v1"), ((3, 0), "v0")]),
+    ([((4, 0), "a"), ((2.5, 0), "b")], (1, 0), 3.0, 0.0, [((2.5, 0), "b"), ((3, 0), "a")]),
+    # Left of the origin, normal (-1, 0): keep x >= -3; tuple ids as the clipping uses them.
+    ([((-5, -1), ("A", 1, 2, 3)), ((-1, -1), ("A", 1, 2, 0))], (-1, 0), 3.0, 0.0,
+     [((-1, -1), ("A", 1, 2, 0)), ((-3, -1), ("A", 1, 2, 3))]),
+    # A normal of length 2 (the line 2 y = 2) and a slanted one (0.6 x + 0.8 y = 1).
+    ([((0, 0), "a"), ((0, 4), "b")], (0, 2), 2.0, 0.0, [((0, 0), "a"), ((0, 1), "b")]),
+    ([((0, 0), "a"), ((2, 1), "b")], (0.6, 0.8), 1.0, 0.0, [((0, 0), "a"), ((1, 0.5), "b")]),
+    # Both kept, both cut.
+    ([((0, 1), "a"), ((2, 1), "b")], (0, 1), 2.0, 0.0, [((0, 1), "a"), ((2, 1), "b")]),
+    ([((0, 1), "a"), ((2, 1), "b")], (0, 1), 0.5, 0.0, []),
+    # An end exactly on the line is kept as it is (<=), and adds no crossing.
+    ([((3, 0), "a"), ((5, 0), "b")], (1, 0), 3.0, 0.0, [((3, 0), "a")]),
+    ([((5, 0), "a"), ((3, 0), "b")], (1, 0), 3.0, 0.0, [((3, 0), "b")]),
+    ([((1, 0), "a"), ((3, 0), "b")], (1, 0), 3.0, 0.0, [((1, 0), "a"), ((3, 0), "b")]),
+    # A single point: kept on or below the line, else nothing.
+    ([((1, 2), "p")], (0, 1), 2.0, 0.0, [((1, 2), "p")]),
+    ([((1, 1), "p")], (0, 1), 2.0, 0.0, [((1, 1), "p")]),
+    ([((1, 2.5), "p")], (0, 1), 2.0, 0.0, []),
+    # Tolerance 0.001: an end 0.0005 beyond the line counts as on it (kept, no crossing).
+    ([((0, 0), "a"), ((3.0005, 0), "b")], (1, 0), 3.0, 0.001, [((0, 0), "a"), ((3.0005, 0), "b")]),
+    ([((3.0005, 0), "a"), ((5, 0), "b")], (1, 0), 3.0, 0.001, [((3.0005, 0), "a")]),
+]
+
+
+def pairs_problem(got, want: list) -> str | None:
+    """A returned list of (point, id) against the expected one, in order."""
+    if not isinstance(got, list) or not all(isinstance(item, list) and len(item) == 2 for item in got):
+        return f"must return a list of (point, feature_id) pairs, got {show(got)}"
+    if len(got) != len(want):
+        return f"expected {len(want)} pair(s) {show(want)}, got {len(got)}: {show(got)}"
+    for k, ((point, feature), (want_point, want_id)) in enumerate(zip(got, want)):
+        vector = as_vector(point, 2)
+        if vector is None or not np.all(np.abs(vector - np.asarray(want_point, dtype=float)) <= 1e-9):
+            return f"pair {k}: expected the point {show(list(want_point))}, got {show(point)} (all pairs: {show(got)})"
+        if feature != plain_id(want_id):
+            return (f"pair {k} at {show(list(want_point))}: expected the feature id {show(plain_id(want_id))}, got "
+                    f"{show(feature)} (a crossing keeps the id of the end it replaces)")
+    return None
+
+
+@pytest.mark.points(1)
+def test_clip_segment(student):
+    """One clipping step: the part of a segment on the kept side of a line"""
+    calls = [([(np.array(pt, dtype=float), feature) for pt, feature in segment], np.array(normal, dtype=float), offset,
+              tolerance) for segment, normal, offset, tolerance, _ in CLIP_CASES]
+    answers = student.call_many(POLYGONS, "clip_segment_to_half_plane", calls)
+    check_cases(zip(CLIP_CASES, answers), lambda case: pairs_problem(case[1], case[0][4]), "segments and lines",
+                describe=lambda case: (f"clip_segment_to_half_plane({show([(list(pt), f) for pt, f in case[0][0]])}, "
+                                       f"{show(list(case[0][1]))}, {show(case[0][2])}, tolerance={show(case[0][3])})"))
+
+
+def box_faces(vertices) -> tuple:
+    """(vertices, unit outward normals, face indices) of a convex CCW polygon, every edge kept."""
+    v = np.asarray(vertices, dtype=float)
+    edges = np.roll(v, -1, axis=0) - v
+    normals = np.column_stack([edges[:, 1], -edges[:, 0]]) / np.hypot(edges[:, 0], edges[:, 1])[:, None]
+    return v, normals, np.arange(len(v))
+
+
+FLOOR = [(-1, -1), (1, -1), (1, 0), (-1, 0)]      # reference face 2: from (1, 0) to (-1, 0), normal (0, 1)
+
+
+def far_floor(x: float) -> list:
+    return [(x - 1, -1), (x + 1, -1), (x + 1, 0), (x - 1, 0)]
+
+
+#: (reference vertices, reference normal, face, incident vertices, ref_name, scale,
+#:  expected [(point, depth, feature id)]), worked out by hand: the incident face is the
+#: one most anti-parallel to the normal; it is clipped to the reference face's side planes
+#: (a crossing keeps the id of the vertex it replaces); points at most KEEP_POINT_TOL * scale
+#: above the face are kept, each moved halfway to the face, its depth how far below it is.
+MANIFOLD_CASES = [
+    # Docstring example: a crate 0.1 m into a floor, its bottom face (face 0) inside the floor's top.
+    ([(-5, -1), (5, -1), (5, 0), (-5, 0)], (0, 1), 2, [(-0.5, -0.1), (0.5, -0.1), (0.5, 0.9), (-0.5, 0.9)], "A", 5.0,
+     [((-0.5, -0.05), 0.1, ("A", 2, 0, 0)), ((0.5, -0.05), 0.1, ("A", 2, 0, 1))]),
+    # The crate reaches past the floor's left end x = -1: vertex 0 is cut there.
+    (FLOOR, (0, 1), 2, [(-2, -0.1), (0.5, -0.1), (0.5, 0.9), (-2, 0.9)], "A", 2.0,
+     [((-1, -0.05), 0.1, ("A", 2, 0, 0)), ((0.5, -0.05), 0.1, ("A", 2, 0, 1))]),
+    # Past both ends: both vertices are cut, each crossing keeping its vertex's id.
+    (FLOOR, (0, 1), 2, [(-2, -0.1), (3, -0.1), (3, 0.9), (-2, 0.9)], "A", 3.0,
+     [((-1, -0.05), 0.1, ("A", 2, 0, 0)), ((1, -0.05), 0.1, ("A", 2, 0, 1))]),
+    # A tilted bottom face: (-0.5, -0.2) is 0.2 deep, (0.5, 0.2) above the floor (dropped).
+    (FLOOR, (0, 1), 2, [(-0.5, -0.2), (0.5, 0.2), (0.5, 1.2), (-0.5, 1.2)], "A", 1.2,
+     [((-0.5, -0.1), 0.2, ("A", 2, 0, 0))]),
+    # B holds the reference face, its face 1 (x = 1, normal (1, 0)); the incident face is
+    # the other box's face 3, from its vertex 3 (0.9, 0.5) to vertex 0 (0.9, -0.5).
+    ([(-1, -1), (1, -1), (1, 1), (-1, 1)], (1, 0), 1, [(0.9, -0.5), (2, -0.5), (2, 0.5), (0.9, 0.5)], "B", 2.0,
+     [((0.95, 0.5), 0.1, ("B", 1, 3, 3)), ((0.95, -0.5), 0.1, ("B", 1, 3, 0))]),
+    # Resting exactly on the floor, scale 0 (no roundoff allowance): points on the face are kept, depth 0.
+    (FLOOR, (0, 1), 2, [(-0.5, 0), (0.5, 0), (0.5, 1), (-0.5, 1)], "A", 0.0,
+     [((-0.5, 0), 0.0, ("A", 2, 0, 0)), ((0.5, 0), 0.0, ("A", 2, 0, 1))]),
+    # 4e-7 m above the floor: kept when the coordinates are about 1e6 m (allowance 1e-12 *
+    # 1e6 = 1e-6 m), each point 2e-7 above the face with depth -4e-7; dropped near the origin.
+    (far_floor(1e6), (0, 1), 2, [(1e6 - 0.5, 4e-7), (1e6 + 0.5, 4e-7), (1e6 + 0.5, 1), (1e6 - 0.5, 1)], "A", 1e6 + 1,
+     [((1e6 - 0.5, 2e-7), -4e-7, ("A", 2, 0, 0)), ((1e6 + 0.5, 2e-7), -4e-7, ("A", 2, 0, 1))]),
+    (FLOOR, (0, 1), 2, [(-0.5, 4e-7), (0.5, 4e-7), (0.5, 1), (-0.5, 1)], "A", 1.0, []),
+]
+
+
+def manifold_problem(got, want: list) -> str | None:
+    """Returned (points, depths, feature_ids) against the expected [(point, depth, id)], as a set."""
+    if not (isinstance(got, list) and len(got) == 3 and all(isinstance(part, list) for part in got)
+            and len(got[0]) == len(got[1]) == len(got[2])):
+        return f"must return (points, depths, feature_ids), three lists of the same length, got {show(got)}"
+    found = list(zip(*got))
+    if len(found) != len(want):
+        return f"expected {len(want)} contact point(s) {show([list(w[0]) for w in want])}, got {len(found)}: {show(got[0])}"
+    remaining = list(found)
+    for point, depth, feature in want:
+        match = [item for item in remaining if as_vector(item[0], 2) is not None
+                 and np.all(np.abs(as_vector(item[0], 2) - np.asarray(point, dtype=float)) <= 1e-9)]
+        if not match:
+            return (f"expected a contact point at {show(list(point))} (halfway between the incident point and the "
+                    f"reference face), got the points {show(got[0])}")
+        item = match[0]
+        remaining.remove(item)
+        value = as_number(item[1])
+        if value is None or not abs(value - depth) <= 1e-9:
+            return f"the depth of the point {show(list(point))}: expected {show(depth)}, got {show(item[1])}"
+        if item[2] != plain_id(feature):
+            return (f"the feature id of the point {show(list(point))}: expected {show(plain_id(feature))}, got "
+                    f"{show(item[2])} ((ref_name, reference face, incident face, the vertex it comes from))")
+    return None
+
+
+@pytest.mark.points(1)
+def test_reference_face_manifold(student):
+    """Clipping the incident face against a reference face"""
+    calls = []
+    for ref, normal, face, incident, name, scale, _ in MANIFOLD_CASES:
+        calls.append((np.asarray(ref, dtype=float), np.array(normal, dtype=float), face, *box_faces(incident), name, scale))
+    answers = student.call_many(POLYGONS, "reference_face_manifold", calls)
+    check_cases(zip(MANIFOLD_CASES, answers), lambda case: manifold_problem(case[1], case[0][6]), "reference faces",
+                describe=lambda case: (f"reference_face_manifold(ref_vertices={show([list(v) for v in case[0][0]])}, "
+                                       f"ref_normal={show(list(case[0][1]))}, ref_face={case[0][2]}, "
+                                       f"inc_vertices={show([list(v) for v in case[0][3]])}, (its normals and faces), "
+                                       f"ref_name={case[0][4]!r}, scale={show(case[0][5])})"))
 
 
 # Categories (Hypothesis: a failing case shrinks to a small one of the same category) -------------

@@ -1,11 +1,12 @@
-"""Broad phase benchmark: the numpy grid against brute force, the readable grid and
-quadtree of the course, scipy's cKDTree and pymunk's two spatial indexes.
+"""Broad phase benchmark: the numpy grid and its numba twin against brute force, the
+readable grid and quadtree of the course, scipy's cKDTree and pymunk's two spatial indexes.
 
     python bench/bench_broadphase.py [--quick]
 
 Prints one table (median time of several runs, pair count, peak memory), the speed
-ratios of the numpy grid over every rival measured side by side in this run, and
-whether the goals are met.  ``run(quick)`` returns the rows for another script.
+ratios of the numpy grid and of the numba grid over every rival measured side by side
+in this run, and whether the goals are met.  ``run(quick)`` returns the rows for
+another script.
 
 Scenes
     N boxes with sides drawn uniformly in [0.5, 1.5] m.  "uniform": centres uniform in
@@ -43,14 +44,19 @@ method here runs on one thread, so on an idle machine the two agree)
       phase" times such a space (BB tree) the same way: what a pymunk user pays for
       collision detection.
       pymunk runs in a worker process (its teardown of 10^5 bodies takes minutes, and
-      its memory lives in C), which also times the numpy grid alternately with each
-      pymunk step: the pymunk ratios come from those paired runs.
+      its memory lives in C), which also times the numpy grid and the numba grid
+      alternately with each pymunk step: the pymunk ratios come from those paired runs.
+    - numba grid (:func:`solutions.broadphase.grid_numba.pairs_grid_numba`): compile
+      time is excluded.  Every process that times it (this one and the pymunk worker)
+      first calls it once on a small scene, untimed, which compiles it or loads the
+      machine code cached in ``__pycache__`` by an earlier run.
 
 Memory
     "tracemalloc": peak of Python and numpy allocations during one call.  "RSS": growth
-    of the resident memory of a fresh worker process during one call (cKDTree and
-    pymunk allocate in C/C++, invisible to tracemalloc); for pymunk, from ``space.add``
-    to the end of the first step (index, plus arbiters for the step with narrow phase).
+    of the resident memory of a fresh worker process during one call (cKDTree, pymunk
+    and the numba grid allocate outside numpy's allocator, invisible to tracemalloc);
+    for pymunk, from ``space.add`` to the end of the first step (index, plus arbiters
+    for the step with narrow phase); for the numba grid, after its warm-up call.
 """
 from __future__ import annotations
 
@@ -80,10 +86,12 @@ from solutions.broadphase import (  # noqa: E402
     pairs_uniform_grid,
     suggest_cell_size,
 )
+from solutions.broadphase.grid_numba import pairs_grid_numba  # noqa: E402
 
 BRUTE = "brute force (numpy, chunked)"
 READABLE_GRID = "readable grid (every_cell)"
 NUMPY_GRID = "numpy grid (sorted strips)"
+NUMBA_GRID = "numba grid (compiled strips)"
 QUADTREE = "quadtree (readable)"
 CKDTREE = "scipy cKDTree"
 PYMUNK_TREE = "pymunk BB tree, broad phase"
@@ -104,6 +112,7 @@ WARM_UP_BELOW_S = 0.1           # s: faster methods get an untimed call before e
 GOAL_BRUTE_RATIO = 20.0         # at 10k: numpy grid >= 20x faster than brute force
 GOAL_PYMUNK_RATIO = 4.0         # at 10k: >= 4x faster than pymunk's faster index
 GOAL_CKDTREE_RATIO = 1.0        # at 100k: no slower than cKDTree
+GOAL_NUMBA_HASH_RATIO = 4.0     # at 10k: numba grid >= 4x faster than pymunk's spatial hash
 
 
 # ------------------------------------------------------------------------- scenes
@@ -144,12 +153,22 @@ IN_PROCESS = {
     BRUTE: pairs_brute_force_numpy,
     READABLE_GRID: readable_grid,
     NUMPY_GRID: pairs_grid_numpy,
+    NUMBA_GRID: pairs_grid_numba,
     QUADTREE: pairs_quadtree,
     CKDTREE: pairs_ckdtree,
 }
 
 
+#: Methods whose memory is measured as RSS growth in a worker (allocations outside numpy).
+RSS_WORKER_METHODS = {CKDTREE: pairs_ckdtree, NUMBA_GRID: pairs_grid_numba}
+
+
 # ------------------------------------------------------------------- measuring
+def warm_up_numba() -> None:
+    """Compile the numba grid (or load its cached machine code): not part of any timing."""
+    pairs_grid_numba(make_scene("uniform", 200))
+
+
 def rounds_of_timings(methods: dict, aabbs: np.ndarray, rounds: int,
                       budget_s: float) -> tuple[dict[str, list[float]], dict[str, int]]:
     """Call every method once per round; a method stops once it has used ``budget_s``.
@@ -230,11 +249,11 @@ def finish_worker(answer: dict) -> None:
     os._exit(0)
 
 
-def ckdtree_memory_worker(kind: str, n: int) -> None:
+def rss_memory_worker(method: str, kind: str, n: int) -> None:
     aabbs = make_scene(kind, n)
-    pairs_ckdtree(aabbs[:100])      # first-call setup outside the measurement
+    RSS_WORKER_METHODS[method](aabbs[:200])      # first-call setup (and compilation) outside the measurement
     with RssGrowth() as growth:
-        pairs_ckdtree(aabbs)
+        RSS_WORKER_METHODS[method](aabbs)
     finish_worker({"rss_mb": growth.mb})
 
 
@@ -266,7 +285,8 @@ def pymunk_worker(kind: str, n: int, rounds: int) -> None:
             x, y = body.position
             body.position = (x + shift, y)
 
-    answer = {"times_ms": {}, "grid_times_ms": {}, "pairs": {}, "rss_mb": {}}
+    warm_up_numba()
+    answer = {"times_ms": {}, "grid_times_ms": {}, "numba_times_ms": {}, "pairs": {}, "rss_mb": {}}
     keep_alive = []
     for method, index, broad_phase_only in ((PYMUNK_TREE, "tree", True), (PYMUNK_HASH, "hash", True),
                                             (PYMUNK_TREE_FULL, "tree", False)):
@@ -277,7 +297,7 @@ def pymunk_worker(kind: str, n: int, rounds: int) -> None:
         answer["rss_mb"][method] = growth.mb
         if not broad_phase_only:
             answer["pairs"][method] = len(space._get_arbiters())
-        pymunk_times, grid_times = [], []
+        pymunk_times, grid_times, numba_times = [], [], []
         for round_index in range(rounds):
             move_all(bodies, PYMUNK_SHIFT if round_index % 2 == 0 else -PYMUNK_SHIFT)
             started = clock()
@@ -286,8 +306,12 @@ def pymunk_worker(kind: str, n: int, rounds: int) -> None:
             started = clock()
             pairs_grid_numpy(aabbs)
             grid_times.append(clock() - started)
+            started = clock()
+            pairs_grid_numba(aabbs)
+            numba_times.append(clock() - started)
         answer["times_ms"][method] = 1e3 * statistics.median(pymunk_times)
         answer["grid_times_ms"][method] = 1e3 * statistics.median(grid_times)
+        answer["numba_times_ms"][method] = 1e3 * statistics.median(numba_times)
         keep_alive.append(space)
     # Pair counts of the broad-phase configurations: the same indexes without the filter.
     # (Space._get_arbiters is pymunk's own, private, list of cached arbiters; pymunk is pinned.)
@@ -306,13 +330,15 @@ def run(quick: bool) -> list[dict]:
 
     Keys: ``n``, ``scene``, ``method``, ``median_ms`` (None if skipped), ``runs``,
     ``estimated`` (bool), ``pairs`` and ``pairs_match`` (count equal to the numpy
-    grid's), ``peak_mb`` and ``memory_tool``, ``grid_ms_alongside`` (numpy grid median
-    measured in the same worker, for pymunk rows) and ``note``.
+    grid's), ``peak_mb`` and ``memory_tool``, ``grid_ms_alongside`` and
+    ``numba_ms_alongside`` (numpy and numba grid medians measured in the same worker,
+    for pymunk rows) and ``note``.
 
-    ``quick``: 3 rounds instead of 7; at 100 000 boxes only the numpy grid and
-    cKDTree; pymunk only at 10 000; memory only for the numpy grid and cKDTree at
+    ``quick``: 3 rounds instead of 7; at 100 000 boxes only the numpy and numba grids
+    and cKDTree; pymunk only at 10 000; memory only for the two grids and cKDTree at
     100 000.
     """
+    warm_up_numba()
     rows = []
     for n in SIZES:
         big = n >= 100_000
@@ -332,9 +358,9 @@ def run(quick: bool) -> list[dict]:
                 if name in methods:
                     row.update(median_ms=1e3 * statistics.median(times[name]), runs=len(times[name]),
                                pairs=counts[name], pairs_match=counts[name] == reference)
-                    if name == CKDTREE and (not quick or big):
-                        row.update(peak_mb=run_worker("--ckdtree-memory", kind, str(n))["rss_mb"], memory_tool="RSS")
-                    elif name != CKDTREE and (not quick or name == NUMPY_GRID):
+                    if name in RSS_WORKER_METHODS and (not quick or big):
+                        row.update(peak_mb=run_worker("--rss-memory", name, kind, str(n))["rss_mb"], memory_tool="RSS")
+                    elif name not in RSS_WORKER_METHODS and (not quick or name == NUMPY_GRID):
                         row.update(peak_mb=tracemalloc_peak_mb(methods[name], aabbs), memory_tool="tracemalloc")
                 elif name == BRUTE:
                     ten_k = _row(rows, 10_000, kind, BRUTE)
@@ -350,7 +376,8 @@ def run(quick: bool) -> list[dict]:
                 row.update(median_ms=worker["times_ms"][name], runs=pymunk_rounds,
                            pairs=worker["pairs"][name], pairs_match=worker["pairs"][name] == reference,
                            peak_mb=worker["rss_mb"][name], memory_tool="RSS",
-                           grid_ms_alongside=worker["grid_times_ms"][name])
+                           grid_ms_alongside=worker["grid_times_ms"][name],
+                           numba_ms_alongside=worker["numba_times_ms"][name])
                 rows.append(row)
     return rows
 
@@ -358,7 +385,7 @@ def run(quick: bool) -> list[dict]:
 def _empty_row(n: int, scene: str, method: str, note: str) -> dict:
     return {"n": n, "scene": scene, "method": method, "median_ms": None, "runs": 0, "estimated": False,
             "pairs": None, "pairs_match": None, "peak_mb": None, "memory_tool": "",
-            "grid_ms_alongside": None, "note": note}
+            "grid_ms_alongside": None, "numba_ms_alongside": None, "note": note}
 
 
 # ------------------------------------------------------------------------ report
@@ -366,13 +393,15 @@ def _row(rows, n, scene, method):
     return next((r for r in rows if r["n"] == n and r["scene"] == scene and r["method"] == method), None)
 
 
-def speedup(rows: list[dict], n: int, scene: str, rival: str) -> float | None:
-    """How many times faster the numpy grid is than ``rival`` (paired runs for pymunk)."""
+def speedup(rows: list[dict], n: int, scene: str, rival: str, ours: str = NUMPY_GRID) -> float | None:
+    """How many times faster ``ours`` (the numpy or the numba grid) is than ``rival``
+    (for pymunk, from the paired runs in its worker)."""
     other = _row(rows, n, scene, rival)
-    if other is None or other["median_ms"] is None:
+    mine = _row(rows, n, scene, ours)
+    if rival == ours or other is None or other["median_ms"] is None or mine is None or mine["median_ms"] is None:
         return None
-    grid_ms = other["grid_ms_alongside"] or _row(rows, n, scene, NUMPY_GRID)["median_ms"]
-    return other["median_ms"] / grid_ms
+    alongside = other["numba_ms_alongside" if ours == NUMBA_GRID else "grid_ms_alongside"]
+    return other["median_ms"] / (alongside or mine["median_ms"])
 
 
 def goals(rows: list[dict]) -> list[tuple[str, str, float | None, bool | None]]:
@@ -390,6 +419,10 @@ def goals(rows: list[dict]) -> list[tuple[str, str, float | None, bool | None]]:
     for scene in SCENES:
         ratio = speedup(rows, 100_000, scene, CKDTREE)
         out.append(("100k: no slower than cKDTree", scene, ratio, None if ratio is None else ratio >= GOAL_CKDTREE_RATIO))
+    for scene in SCENES:
+        ratio = speedup(rows, 10_000, scene, PYMUNK_HASH, ours=NUMBA_GRID)
+        out.append((f"10k: numba grid >= {GOAL_NUMBA_HASH_RATIO:g}x faster than pymunk spatial hash", scene, ratio,
+                    None if ratio is None else ratio >= GOAL_NUMBA_HASH_RATIO))
     return out
 
 
@@ -405,24 +438,27 @@ def report(rows: list[dict]) -> str:
         note = r["note"] or ("estimated" if r["estimated"] else "")
         lines.append(f"{r['n']:>7}  {r['scene']:<9}  {r['method']:<40} {median:>11} {r['runs'] or '':>4} "
                      f"{'' if r['pairs'] is None else r['pairs']:>8} {same:>4} {peak:>8}  {note}")
-    lines += ["", "* estimated.  Peak MB: T = tracemalloc, R = RSS growth in a worker process.", "",
-              "How many times faster the numpy grid is (pymunk: paired runs in the pymunk worker):"]
-    rivals = [BRUTE, READABLE_GRID, QUADTREE, CKDTREE, PYMUNK_TREE, PYMUNK_HASH, PYMUNK_TREE_FULL]
-    short = ["brute", "read.grid", "quadtree", "cKDTree", "pm tree", "pm hash", "pm full"]
-    lines.append(f"{'N':>7}  {'scene':<9}  " + " ".join(f"{s:>9}" for s in short))
-    for n in sorted({r["n"] for r in rows}):
-        for scene in SCENES:
-            ratios = [speedup(rows, n, scene, rival) for rival in rivals]
-            cells = []
-            for rival, ratio in zip(rivals, ratios):
-                estimated = (_row(rows, n, scene, rival) or {}).get("estimated")
-                cells.append("-".rjust(9) if ratio is None else f"{ratio:8.1f}{'*' if estimated else 'x'}")
-            lines.append(f"{n:>7}  {scene:<9}  " + " ".join(cells))
+    lines += ["", "* estimated.  Peak MB: T = tracemalloc, R = RSS growth in a worker process.",
+              "numba grid: compile time excluded (an untimed warm-up call in each process first)."]
+    rivals = [BRUTE, READABLE_GRID, QUADTREE, CKDTREE, NUMPY_GRID, NUMBA_GRID,
+              PYMUNK_TREE, PYMUNK_HASH, PYMUNK_TREE_FULL]
+    short = ["brute", "read.grid", "quadtree", "cKDTree", "np grid", "nb grid", "pm tree", "pm hash", "pm full"]
+    for ours in (NUMPY_GRID, NUMBA_GRID):
+        lines += ["", f"How many times faster the {ours.split(' (')[0]} is (pymunk: paired runs in the pymunk worker):"]
+        lines.append(f"{'N':>7}  {'scene':<9}  " + " ".join(f"{s:>9}" for s in short))
+        for n in sorted({r["n"] for r in rows}):
+            for scene in SCENES:
+                cells = []
+                for rival in rivals:
+                    ratio = speedup(rows, n, scene, rival, ours)
+                    estimated = (_row(rows, n, scene, rival) or {}).get("estimated")
+                    cells.append("-".rjust(9) if ratio is None else f"{ratio:8.1f}{'*' if estimated else 'x'}")
+                lines.append(f"{n:>7}  {scene:<9}  " + " ".join(cells))
     lines += ["", "Goals:"]
     for goal, scene, ratio, met in goals(rows):
         verdict = "not measured" if met is None else ("met" if met else "short of it (a figure, not an error)")
         measured = "-" if ratio is None else f"{ratio:.1f}x"
-        lines.append(f"  {goal:<62} {scene:<9} {measured:>7}  {verdict}")
+        lines.append(f"  {goal:<66} {scene:<9} {measured:>7}  {verdict}")
     mismatched = [r for r in rows if r["pairs_match"] is False]
     lines.append("")
     lines.append("Pair counts: all equal to the numpy grid's." if not mismatched else
@@ -434,12 +470,12 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer runs and methods (see run()), for a smoke run")
     parser.add_argument("--pymunk", nargs=3, metavar=("SCENE", "N", "ROUNDS"), help=argparse.SUPPRESS)
-    parser.add_argument("--ckdtree-memory", nargs=2, metavar=("SCENE", "N"), help=argparse.SUPPRESS)
+    parser.add_argument("--rss-memory", nargs=3, metavar=("METHOD", "SCENE", "N"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.pymunk:
         pymunk_worker(args.pymunk[0], int(args.pymunk[1]), int(args.pymunk[2]))
-    if args.ckdtree_memory:
-        ckdtree_memory_worker(args.ckdtree_memory[0], int(args.ckdtree_memory[1]))
+    if args.rss_memory:
+        rss_memory_worker(args.rss_memory[0], args.rss_memory[1], int(args.rss_memory[2]))
     started = time.perf_counter()
     rows = run(quick=args.quick)
     print(report(rows))

@@ -7,7 +7,9 @@ Every scene runs under every setting of the grid, side by side in one run:
 - the reference engine's plain step: time step x iterations x position correction x
   plain sub-steps (each sub-step a whole step, contacts found again);
 - the reference engine's soft step (Box2D v3 style, contacts found once per step):
-  time step x sub-steps x sweeps per pass;
+  time step x sub-steps x sweeps per pass, readable (``backend="python"``) and
+  compiled (``backend="numba"``, engine "reference-numba": the same motion to 1e-12,
+  compiled before timing);
 - pymunk 7: time step x iterations;
 - Box2D 2.3 (tools/box2d_mirror.py: polygons inset by Box2D's 0.01 m skin, materials
   mixed as the reference's products): time step x velocity/position iterations.
@@ -23,7 +25,11 @@ for a scene that comes to rest).  The error of a scene is what its goal is about
 max(overlap, drift) for stacks, pyramids and the mass ratio, the largest stretch of a
 link for the chain, and the overlap left after one second for overlap recovery.
 Prints a table marking the Pareto-optimal settings of each scene (no other setting is
-both cheaper and more accurate) and writes DIR/hard_cases.md and DIR/hard_cases.png.
+both cheaper and more accurate), then the goals measured in this run: per scene, at
+each time per frame a pymunk or Box2D setting takes, the compiled reference's best
+error within that time against theirs; and pyramid_20 at its recommended settings
+against Box2D at 8/3 iterations and pymunk at 30.  Writes DIR/hard_cases.md and
+DIR/hard_cases.png.
 """
 from __future__ import annotations
 
@@ -95,11 +101,13 @@ def make_runs(name: str, quick: bool) -> list[Run]:
             runs.append(Run(name, "reference", f"{label} plain it={iterations} {correction} sub={substeps}", dt,
                             world.bodies, lambda w=world, h=dt: w.step(h), world.joints))
         for substeps, sweeps in (QUICK_SOFT_GRID if quick else SOFT_GRID):
-            settings = scene.world_settings(iterations=sweeps)
-            settings.soft_step, settings.substeps = True, substeps
-            world = scene.build_world(settings)
-            runs.append(Run(name, "reference", f"{label} soft sub={substeps} it={sweeps}", dt, world.bodies,
-                            lambda w=world, h=dt: w.step(h), world.joints))
+            for backend in ("python", "numba"):
+                settings = scene.world_settings(iterations=sweeps)
+                settings.soft_step, settings.substeps, settings.backend = True, substeps, backend
+                world = scene.build_world(settings)
+                engine = "reference" if backend == "python" else "reference-numba"
+                runs.append(Run(name, engine, f"{label} soft sub={substeps} it={sweeps}", dt, world.bodies,
+                                lambda w=world, h=dt: w.step(h), world.joints))
         for iterations in PYMUNK_ITERATIONS:
             bodies = scene.make_bodies()
             joints = scene.make_joints() if scene.make_joints else []
@@ -160,7 +168,17 @@ def simulate(name: str, seconds: float, quick: bool) -> list[dict]:
     return rows
 
 
+def warm_up_compiled_twins() -> None:
+    """Compile (or load from numba's cache) every compiled twin before anything is timed."""
+    scene = get_scene("pyramid_10")
+    settings = scene.world_settings(iterations=1)
+    settings.soft_step, settings.substeps, settings.backend = True, 2, "numba"
+    world = scene.build_world(settings)
+    world.step(FRAME)
+
+
 def run(quick: bool = False) -> list[dict]:
+    warm_up_compiled_twins()
     rows = []
     for name, seconds in (QUICK_SCENES if quick else SCENES).items():
         rows.extend(simulate(name, seconds, quick))
@@ -202,8 +220,8 @@ def figure(rows: list[dict], path: Path) -> None:
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
     fig, axes = plt.subplots(1, len(scenes), figsize=(4.2 * len(scenes), 3.8), squeeze=False)
     for ax, name in zip(axes[0], scenes):
-        for engine, kind, marker in (("reference", "plain", "o"), ("reference", "soft", "^"), ("pymunk", "", "s"),
-                                     ("box2d", "", "D")):
+        for engine, kind, marker in (("reference", "plain", "o"), ("reference", "soft", "^"),
+                                     ("reference-numba", "soft", "v"), ("pymunk", "", "s"), ("box2d", "", "D")):
             pts = [r for r in rows if r["scene"] == name and r["engine"] == engine and kind in r["setting"]]
             ax.scatter([r["ms_per_frame"] for r in pts], [max(r["error"], 1e-6) for r in pts], marker=marker,
                        label=f"{engine} {kind}".strip(), alpha=0.8)
@@ -217,6 +235,52 @@ def figure(rows: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
+def equal_time_goals(rows: list[dict]) -> str:
+    """Per scene and per peer setting (pymunk or Box2D): the compiled reference's best
+    error among its settings that take at most that setting's time per frame."""
+    lines = ["| scene | peer setting | peer ms/frame | peer error (m) | compiled reference at that time | met |",
+             "| --- | --- | --- | --- | --- | --- |"]
+    for name in dict.fromkeys(r["scene"] for r in rows):
+        compiled = [r for r in rows if r["scene"] == name and r["engine"] == "reference-numba"]
+        fastest = min((r["ms_per_frame"] for r in compiled), default=math.inf)
+        for peer in (r for r in rows if r["scene"] == name and r["engine"] in ("pymunk", "box2d")):
+            within = [r for r in compiled if r["ms_per_frame"] <= peer["ms_per_frame"]]
+            best = min(within, key=lambda r: r["error"], default=None)
+            shown = (f"{best['error']:.4f} m ({best['setting']}, {best['ms_per_frame']:.2f} ms)" if best else
+                     f"none: its fastest takes {fastest:.2f} ms, {fastest / peer['ms_per_frame']:.0f}x as long")
+            met = best is not None and best["error"] < peer["error"]
+            lines.append(f"| {name} | {peer['engine']} {peer['setting']} | {peer['ms_per_frame']:.3f} | "
+                         f"{peer['error']:.4f} | {shown} | {'yes' if met else 'no'} |")
+    return "\n".join(lines)
+
+
+def pyramid_20_goal(seconds: float = 1.0) -> str:
+    """pyramid_20 at its recommended settings (compiled) against Box2D at 8/3 iterations
+    and pymunk at 30, processor time per frame measured side by side."""
+    scene = get_scene("pyramid_20")
+    settings = scene.recommended_settings()
+    settings.backend = "numba"
+    world = scene.build_world(settings)
+    bodies = scene.make_bodies()
+    space, _ = build_space(bodies, scene.gravity, 30, 0.005, [])
+    mirror = Box2DMirror.from_scene(scene, velocity_iterations=8, position_iterations=3)
+    steppers = {"reference (recommended, numba)": lambda: world.step(FRAME),
+                "Box2D 8/3": lambda: mirror.step(FRAME, copy=False), "pymunk 30": lambda: space.step(FRAME)}
+    spent = dict.fromkeys(steppers, 0.0)
+    frames = round(seconds / FRAME)
+    for _ in range(frames):
+        for label, step in steppers.items():
+            start = time.process_time()
+            step()
+            spent[label] += time.process_time() - start
+    ms = {label: 1e3 * value / frames for label, value in spent.items()}
+    ours = ms["reference (recommended, numba)"]
+    return (f"pyramid_20, ms per frame over {seconds:g} s: " + ", ".join(f"{k} {v:.2f}" for k, v in ms.items())
+            + f"\n  goal: at most Box2D's time ({ours / ms['Box2D 8/3']:.1f}x it: "
+            f"{'met' if ours <= ms['Box2D 8/3'] else 'not met'}) and at most half of pymunk's "
+            f"({ours / ms['pymunk 30']:.1f}x it: {'met' if ours <= 0.5 * ms['pymunk 30'] else 'not met'})")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="two scenes, one simulated second, a smaller grid")
@@ -224,6 +288,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     rows = run(args.quick)
     text = table(rows)
+    text += ("\n\nGoal: at equal processor time per frame, the compiled reference's error below pymunk's and "
+             "Box2D's\n\n" + equal_time_goals(rows) + "\n\n" + pyramid_20_goal(0.5 if args.quick else 1.0))
     print(text)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "hard_cases.md").write_text(text + "\n")

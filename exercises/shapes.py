@@ -10,9 +10,16 @@ Conventions (see :mod:`solutions`): SI units, y up, angles in radians counter-cl
 polygon vertices counter-clockwise so that ``perp(edge) = (y, -x)`` points outwards.
 
 Invalid input raises ``ValueError`` with a message naming the problem: NaN or infinite
-coordinates, a negative radius or half-extent, fewer than three polygon vertices, a
+coordinates, coordinates or sizes beyond :data:`MAX_COORDINATE` (their squares would
+overflow), a negative radius or half-extent, fewer than three polygon vertices, a
 clockwise or non-convex polygon.  Zero-size shapes (radius 0, half-extents 0) are
 allowed: they are points or segments, and every test gives them a defined answer.
+
+Rounding.  A coordinate ``x`` is only known to about ``eps * |x|`` (``eps = 2**-52``):
+1.2e-7 m at x = 1e9 m.  :func:`rounding_tolerance` turns that, plus a small part of the
+shapes' own size, into the distance (m) below which the narrow phase treats two computed
+positions as equal; it follows the shapes, not the origin, so a centimetre box at
+x = 1e9 m gets a tolerance of micrometres, not millimetres.
 
 ASCII picture of box vertex numbering (AABB and OBB, local frame)::
 
@@ -34,17 +41,72 @@ import numpy as np
 
 from .vector import cross, rotation_matrix
 
-#: Relative tolerance of the convexity and orientation checks of a polygon.
+#: Relative tolerance of the zero-area check of a polygon (m^2 per m^2 of its size squared).
 CONVEXITY_RTOL = 1e-12
+
+#: Largest absolute coordinate, radius or half-extent (m) a shape accepts.  Distances
+#: are compared squared (``dx * dx + dy * dy <= r * r``); differences of coordinates up
+#: to this size have squares below 1e302, far from the largest double (1.8e308), while
+#: radii of 1e154 m and more would overflow to inf and make apart shapes "touch".
+MAX_COORDINATE = 1e150
+
+#: Relative spacing of doubles, 2**-52.
+EPS = float(np.finfo(float).eps)
+
+#: A coordinate ``x`` computed by a few floating operations is off by a few ``eps * |x|``
+#: (``eps = 2**-52``, so 1 eps * |x| is at most one ulp): :func:`rounding_tolerance`
+#: allows this many of them for the largest coordinate involved ...
+ROUNDOFF_ULPS = 8
+
+#: ... plus this fraction of the shapes' own size (m per m), for what is computed from
+#: the shapes (rotated corners, unit normals, clipped points): a few thousand times the
+#: relative rounding of a double, still far below any length that matters (1e-12 m for
+#: 1 m shapes).
+ROUNDOFF_SIZE_RTOL = 1e-12
+
+
+def rounding_tolerance(coordinate_scale, size) -> float | np.ndarray:
+    """Distance (m) below which two computed positions are equal up to rounding.
+
+    ``ROUNDOFF_ULPS * eps * coordinate_scale + ROUNDOFF_SIZE_RTOL * size``.
+
+    Parameters
+    ----------
+    coordinate_scale : float or numpy.ndarray
+        Largest absolute coordinate involved (m): its rounding is what cannot be avoided.
+    size : float or numpy.ndarray
+        Size of the shapes involved (m), for the rounding of what is computed from them.
+        Arrays give one tolerance per element (broadcast).
+
+    Examples
+    --------
+    A 1 cm box near the origin and at x = 1e9 m (where a double resolves 1.2e-7 m):
+
+    >>> f"{rounding_tolerance(0.01, 0.01):.1e} m, {rounding_tolerance(1e9, 0.01):.1e} m"
+    '1.0e-14 m, 1.8e-06 m'
+    """
+    tolerance = (ROUNDOFF_ULPS * EPS * np.asarray(coordinate_scale, dtype=float)
+                 + ROUNDOFF_SIZE_RTOL * np.asarray(size, dtype=float))
+    return float(tolerance) if tolerance.ndim == 0 else tolerance
+
+
+def check_coordinate_range(name: str, values) -> None:
+    """ValueError unless every value is finite and at most :data:`MAX_COORDINATE` in size."""
+    values = np.asarray(values, dtype=float)
+    if not np.all(np.abs(values) <= MAX_COORDINATE):     # also False for NaN
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"{name} must be finite, got {values.tolist()}")
+        raise ValueError(f"{name} must be at most {MAX_COORDINATE:g} m in absolute value (squared distances of "
+                         f"larger numbers overflow), got {float(np.max(np.abs(values))):g}")
 
 
 def as_point(name: str, value) -> np.ndarray:
-    """``value`` as a read-only float array of shape (2,); ValueError if not finite."""
+    """``value`` as a read-only float array of shape (2,); ValueError if not finite or
+    beyond :data:`MAX_COORDINATE`."""
     point = np.array(value, dtype=float)
     if point.shape != (2,):
         raise ValueError(f"{name} must be a 2D point (x, y), got shape {point.shape}")
-    if not np.all(np.isfinite(point)):
-        raise ValueError(f"{name} must be finite, got {point.tolist()}")
+    check_coordinate_range(name, point)
     point.setflags(write=False)
     return point
 
@@ -56,6 +118,14 @@ def as_length(name: str, value) -> float:
         raise ValueError(f"{name} must be finite, got {length}")
     if length < 0:
         raise ValueError(f"{name} must be >= 0, got {length}")
+    return length
+
+
+def as_size(name: str, value) -> float:
+    """A radius or half-extent (m): :func:`as_length`, and at most :data:`MAX_COORDINATE`."""
+    length = as_length(name, value)
+    if length > MAX_COORDINATE:
+        check_coordinate_range(name, length)
     return length
 
 
@@ -75,7 +145,7 @@ class Circle:
 
     def __post_init__(self):
         object.__setattr__(self, "center", as_point("circle center", self.center))
-        object.__setattr__(self, "radius", as_length("circle radius", self.radius))
+        object.__setattr__(self, "radius", as_size("circle radius", self.radius))
 
     def __repr__(self):
         return f"Circle(center={self.center.tolist()}, radius={self.radius})"
@@ -104,7 +174,7 @@ class AABB:
     def from_center(cls, center, half_extents) -> "AABB":
         """AABB from its centre and half-extents (both in m)."""
         c = as_point("AABB center", center)
-        h = np.array([as_length("AABB half-extent", e) for e in np.asarray(half_extents, dtype=float)])
+        h = np.array([as_size("AABB half-extent", e) for e in np.asarray(half_extents, dtype=float)])
         return cls(c - h, c + h)
 
     @property
@@ -133,7 +203,7 @@ class OBB:
 
     def __post_init__(self):
         object.__setattr__(self, "center", as_point("OBB center", self.center))
-        h = np.array([as_length("OBB half-extent", e) for e in np.asarray(self.half_extents, dtype=float).reshape(-1)])
+        h = np.array([as_size("OBB half-extent", e) for e in np.asarray(self.half_extents, dtype=float).reshape(-1)])
         if h.shape != (2,):
             raise ValueError(f"OBB half_extents must be (hx, hy), got {h.tolist()}")
         h.setflags(write=False)
@@ -159,8 +229,14 @@ class OBB:
 class ConvexPolygon:
     """Convex polygon with counter-clockwise ``vertices`` (n, 2), n >= 3, in m.
 
-    Collinear consecutive vertices are allowed; a clockwise, self-intersecting or
-    non-convex polygon, or one of zero area, raises ``ValueError``.
+    Repeated and collinear consecutive vertices are allowed and dropped: ``vertices``
+    keeps the corners only (:func:`polygon_corners`), so that every edge has its own
+    direction and no two edges face the same way (the contact routines pick one face per
+    direction).  A clockwise, self-intersecting or non-convex polygon, or one of zero
+    area, raises ``ValueError``.
+
+    >>> ConvexPolygon([(0, 0), (1, 0), (2, 0), (2, 2), (2, 2), (0, 2)]).vertices.tolist()
+    [[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]]
     """
 
     vertices: np.ndarray
@@ -171,7 +247,8 @@ class ConvexPolygon:
             raise ValueError(f"a polygon needs an (n, 2) array of n >= 3 vertices, got shape {v.shape}")
         if not np.all(np.isfinite(v)):
             raise ValueError("polygon vertices must be finite (no NaN or inf)")
-        check_convex_ccw(v)
+        check_coordinate_range("polygon vertices", v)
+        v = polygon_corners(v)
         v.setflags(write=False)
         object.__setattr__(self, "vertices", v)
 
@@ -208,24 +285,65 @@ def polygon_centroid(vertices: np.ndarray) -> np.ndarray:
     return origin + c
 
 
-def check_convex_ccw(vertices: np.ndarray) -> None:
-    """Raise ValueError unless ``vertices`` form a convex CCW polygon of positive area."""
+def polygon_corners(vertices: np.ndarray) -> np.ndarray:
+    """The corners of a convex CCW polygon: ``vertices`` without the repeated and collinear ones.
+
+    A vertex is dropped when it lies within :func:`rounding_tolerance` (m) of the segment
+    joining its two neighbours: one vertex at a time, the one nearest to its segment
+    first, and its neighbours then become neighbours.  Raises ValueError unless the
+    vertices form a convex CCW polygon of positive area: every corner left must turn
+    left (a vertex where an edge turns back on itself is not convex).
+
+    Examples
+    --------
+    >>> polygon_corners(np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [1.0, 1.0]])).tolist()
+    [[0.0, 0.0], [2.0, 0.0], [1.0, 1.0]]
+    """
     v = np.asarray(vertices, dtype=float)
-    scale = max(float(np.max(np.abs(v - v.mean(axis=0)))), 1e-300)
+    size = float(np.max(np.ptp(v, axis=0)))
     area = signed_area(v)
     if area < 0:
         raise ValueError("polygon vertices are clockwise; list them counter-clockwise")
-    if area <= CONVEXITY_RTOL * scale * scale:
+    if area <= CONVEXITY_RTOL * size * size:
         raise ValueError("polygon has zero area (all vertices on one line)")
-    edges = np.roll(v, -1, axis=0) - v
-    turns = cross(edges, np.roll(edges, -1, axis=0))
-    if np.any(turns < -CONVEXITY_RTOL * scale * scale):
+    tolerance = rounding_tolerance(float(np.max(np.abs(v))), size)
+    kept = list(range(len(v)))
+    near = _distances_to_neighbour_chords(v) <= tolerance
+    while np.any(near) and len(kept) > 2:
+        # Drop the vertex closest to its chord, then look at its neighbours again.
+        del kept[int(np.argmin(np.where(near, _distances_to_neighbour_chords(v[kept]), np.inf)))]
+        near = _distances_to_neighbour_chords(v[kept]) <= tolerance
+    corners = v[kept]
+    if len(corners) < 3:
+        raise ValueError("polygon has zero area (all vertices on one line)")
+    edges = np.roll(corners, -1, axis=0) - corners
+    turns = cross(np.roll(edges, 1, axis=0), edges)          # the turn at each corner
+    if np.any(turns <= 0.0):
         raise ValueError("polygon is not convex: SAT needs convex shapes; split it into convex parts")
     # A star polygon turns left at every corner but winds twice.
     angles = np.arctan2(edges[:, 1], edges[:, 0])
     winding = np.sum(np.mod(np.diff(np.append(angles, angles[0])) + np.pi, 2 * np.pi) - np.pi)
     if winding > 2 * np.pi + 1e-6:
         raise ValueError("polygon is self-intersecting (winds more than once)")
+    return corners
+
+
+def _distances_to_neighbour_chords(v: np.ndarray) -> np.ndarray:
+    """Distance (m) of each vertex from the segment joining its two neighbours."""
+    before, after = np.roll(v, 1, axis=0), np.roll(v, -1, axis=0)
+    chord, offset = after - before, v - before
+    length2 = np.einsum("kd,kd->k", chord, chord)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        along = np.clip(np.einsum("kd,kd->k", offset, chord) / length2, 0.0, 1.0)
+    along = np.where(length2 > 0.0, along, 0.0)
+    rest = offset - along[:, None] * chord
+    return np.hypot(rest[:, 0], rest[:, 1])
+
+
+def check_convex_ccw(vertices: np.ndarray) -> None:
+    """Raise ValueError unless ``vertices`` form a convex CCW polygon of positive area
+    (collinear and repeated vertices allowed, see :func:`polygon_corners`)."""
+    polygon_corners(vertices)
 
 
 Shape = Circle | AABB | OBB | ConvexPolygon

@@ -41,7 +41,7 @@ from .joints import DistanceJoint, JointSolver
 from .narrowphase.dispatch import collide
 from .narrowphase.speculative import SPECULATIVE_MARGIN, speculative_polygon_manifold
 from .narrowphase.speculative_batch import box_pose, manifolds_as_contacts, speculative_box_manifolds
-from .response.contact_solver import ContactSolver, SolverSettings
+from .response.contact_solver import BACKENDS, ContactSolver, SolverSettings
 from .response.soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, BodyStates, SoftStepSolver, soft_coefficients
 from .shapes import AABB, OBB, Circle, Shape, bounding_aabb
 
@@ -50,6 +50,35 @@ from .shapes import AABB, OBB, Circle, Shape, bounding_aabb
 BATCH_MIN_BOX_PAIRS = 8
 
 BROAD_PHASES = ("auto", "all_pairs", "brute_force", "uniform_grid", "quadtree", "numpy_grid")
+
+#: ``broad_phase="auto"`` takes the method measured fastest for the scene
+#: (bench/bench_auto_broad_phase.py: processor time of one step's detection, broad plus
+#: narrow phase, 2 to 160 bodies; balls among box walls as in chapter 11, boxes on a
+#: ground, balls or boxes scattered).  Testing every pair directly wins only where the
+#: narrow phase costs less than building the AABBs: in scenes of at most this many
+#: bodies ...
+AUTO_ALL_PAIRS_MAX_BODIES = 2
+#: ... and in scenes of circles only (a test of two apart circles takes under 1 us) of
+#: at most this many bodies.
+AUTO_ALL_PAIRS_MAX_CIRCLES = 40
+#: Otherwise the brute-force AABB test is fastest below this many bodies (5 to 20 times
+#: faster than all pairs for scattered bodies of 8 to 64; at most 15 % slower for 3 to 6
+#: boxes that all touch) and the numpy grid from it on (within 10 % of each other from
+#: 64 to 96 bodies, the grid ahead beyond).
+AUTO_GRID_MIN_BODIES = 80
+
+
+def auto_broad_phase(shapes: list[Shape]) -> str:
+    """The broad phase ``"auto"`` runs for these world shapes (see ``AUTO_*`` above).
+
+    >>> auto_broad_phase([Circle((0, 0), 1)] * 10), auto_broad_phase([AABB((0, 0), (1, 1))] * 10)
+    ('all_pairs', 'brute_force')
+    """
+    n = len(shapes)
+    if n <= AUTO_ALL_PAIRS_MAX_BODIES or (n <= AUTO_ALL_PAIRS_MAX_CIRCLES
+                                          and all(isinstance(shape, Circle) for shape in shapes)):
+        return "all_pairs"
+    return "brute_force" if n < AUTO_GRID_MIN_BODIES else "numpy_grid"
 
 
 @dataclass
@@ -61,11 +90,10 @@ class WorldSettings:
     gravity : (float, float)
         Acceleration of gravity (m/s^2).
     broad_phase : str
-        One of ``BROAD_PHASES``.  ``"auto"`` tests all pairs directly below
-        ``broad_phase_min_bodies`` bodies (a broad phase costs more than it saves
-        there) and uses the numpy grid above.
-    broad_phase_min_bodies : int
-        Scene size from which ``"auto"`` runs a broad phase.
+        One of ``BROAD_PHASES``; every method gives the same contacts, only the time
+        differs.  ``"auto"`` takes the one measured fastest for the scene
+        (:func:`auto_broad_phase`): all pairs directly for two bodies and for up to 40
+        circles, the brute-force AABB test below 80 bodies, the numpy grid from 80 on.
     continuous : bool
         Sweep bodies flagged ``is_bullet`` against static bodies (no tunnelling).
     substeps : int
@@ -78,17 +106,27 @@ class WorldSettings:
         and relaxation inside the sub-steps, instead of ``solver.position_correction``.
     solver : SolverSettings
         Switches of the contact solver.
+    backend : str
+        ``"python"``: every stage in readable Python and numpy (the teaching text);
+        ``"numba"``: the compiled twins of the solver kernel (contacts and joints,
+        :mod:`solutions.solver.kernel_numba`), of the numpy grid broad phase
+        (:mod:`solutions.broadphase.grid_numba`) and of the box-pair manifolds of the
+        soft step (:mod:`solutions.narrowphase.box_pairs_numba`), each tested equal to
+        its readable version, and the world to 1e-12 on every hard scene.  Not a
+        setting of the physics: both give the same motion, to rounding.
     """
 
     gravity: tuple[float, float] = (0.0, -9.81)
     broad_phase: str = "auto"
-    broad_phase_min_bodies: int = 16
     continuous: bool = True
     substeps: int = 1
     soft_step: bool = False
     solver: SolverSettings = field(default_factory=SolverSettings)
+    backend: str = "python"
 
     def __post_init__(self):
+        if self.backend not in BACKENDS:
+            raise ValueError(f"backend must be one of {BACKENDS}, got {self.backend!r}")
         if self.broad_phase not in BROAD_PHASES:
             raise ValueError(f"broad_phase must be one of {BROAD_PHASES}, got {self.broad_phase!r}")
         if int(self.substeps) != self.substeps or self.substeps < 1:
@@ -132,9 +170,10 @@ class World:
                 raise ValueError(f"joint between bodies {joint.a} and {joint.b}: no such body")
         # Bodies joined by a joint do not collide with each other (Box2D's collideConnected = false).
         self._jointed = {(min(j.a, j.b), max(j.a, j.b)) for j in self.joints}
-        self.solver = (SoftStepSolver if self.settings.soft_step else ContactSolver)(self.settings.solver)
+        backend = self.settings.backend
+        self.solver = (SoftStepSolver if self.settings.soft_step else ContactSolver)(self.settings.solver, backend)
         self.joint_solver = JointSolver(self.settings.solver.iterations, self.settings.solver.baumgarte,
-                                        self.settings.solver.warm_starting)
+                                        self.settings.solver.warm_starting, backend)
         self.time = 0.0
         self.manifolds: list[tuple[int, int, Contact]] = []
         self.stats = StepStats()
@@ -225,7 +264,7 @@ class World:
         method = self.settings.broad_phase
         n = len(shapes)
         if method == "auto":
-            method = "all_pairs" if n < self.settings.broad_phase_min_bodies else "numpy_grid"
+            method = auto_broad_phase(shapes)
         if method == "all_pairs":
             pairs = ((i, j) for i in range(n) for j in range(i + 1, n))
         else:
@@ -236,6 +275,10 @@ class World:
                 pairs = sorted(pairs_uniform_grid(aabbs, cell_size=suggest_cell_size(aabbs)))
             elif method == "quadtree":
                 pairs = sorted(pairs_quadtree(aabbs))
+            elif self.settings.backend == "numba":       # the numpy grid's compiled twin
+                from .broadphase.grid_numba import pairs_grid_numba
+
+                pairs = [tuple(p) for p in pairs_grid_numba(aabbs).tolist()]
             else:
                 pairs = [tuple(p) for p in pairs_grid_numpy(aabbs).tolist()]
         static = [b.is_static for b in self.bodies]
@@ -266,10 +309,14 @@ class World:
             boxes = []                     # numpy's fixed cost would exceed the loop's
         batched = set(boxes)
         if boxes:
+            if self.settings.backend == "numba":   # the numpy version's compiled twin, equal to it
+                from .narrowphase.box_pairs_numba import speculative_box_manifolds_numba as box_manifolds
+            else:
+                box_manifolds = speculative_box_manifolds
             a = [box_pose(shapes[pairs[k][0]]) for k in boxes]
             b = [box_pose(shapes[pairs[k][1]]) for k in boxes]
-            batch = speculative_box_manifolds(*(np.array(column) for column in zip(*a)),
-                                              *(np.array(column) for column in zip(*b)), SPECULATIVE_MARGIN)
+            batch = box_manifolds(*(np.array(column) for column in zip(*a)),
+                                  *(np.array(column) for column in zip(*b)), SPECULATIVE_MARGIN)
             for k, result in zip(boxes, manifolds_as_contacts(batch)):
                 found[k] = result
         for k, (i, j) in enumerate(pairs):

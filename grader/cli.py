@@ -19,7 +19,7 @@ SUBCOMMANDS = {
     "grade": ("grader.grade", "add_grade_arguments", "main_grade", "grade a class of submissions"),
     "gradescope-zip": ("grader.gradescope", "add_gradescope_arguments", "main_gradescope_zip",
                        "build autograder.zip for Gradescope"),
-    "example-class": ("grader.example_class", "add_example_class_arguments", "main_example_class",
+    "example-class": ("grader.samples.example_class", "add_example_class_arguments", "main_example_class",
                       "write the bundled example class of submissions"),
     "similarity": ("grader.similarity", "add_similarity_arguments", "main_similarity", "flag nearly identical code"),
     "submit": ("grader.submit", "add_submit_arguments", "main_submit", "write the zip to hand in (with a manifest)"),

@@ -63,8 +63,8 @@ STUDENT_FOLDERS = ("tests/public",)
 #: Subcommands of ``grader/cli.py`` the student edition keeps (when their module exists).
 STUDENT_COMMANDS = ("check", "submit")
 #: Never in the student edition: reaching one of these is an error, not a silent copy.
-NEVER_SHIP = ("grade.py", "gradebook.py", "scheduler.py", "isolation.py", "gradescope.py", "example_class.py",
-              "hostile_cases.py", "similarity.py", "report.py", "release.py", "release_book.py", "release_files/", "tests/hidden/", "spec/", "checks/")
+NEVER_SHIP = ("grade.py", "gradebook.py", "scheduler.py", "isolation.py", "gradescope.py", "samples/",
+              "similarity.py", "report.py", "release.py", "release_book.py", "release_files/", "tests/hidden/", "spec/", "checks/")
 #: Leftovers of using a course folder (not someone's work): ignored when replacing a release.
 LEFTOVER_NAMES = {".venv", "__pycache__", ".ipynb_checkpoints", ".pytest_cache", ".hypothesis", ".DS_Store",
                   "build", ".virtual_documents"}

@@ -62,3 +62,40 @@ def drop_balls(steps: int = 120, dt: float = 1 / 60, restitution: float = 0.5, f
             ball.position = ball.position + dt * ball.velocity
         trajectory.append([[float(c) for c in (*b.position, *b.velocity)] for b in balls])
     return {"radius": radius, "dt": dt, "trajectory": trajectory}
+
+
+def stack_of_boxes(steps: int = 60, count: int = 10, dt: float = 1 / 60, iterations: int = 20) -> dict:
+    """``count`` 1 m, 1 kg boxes stacked on static ground, stepped with the student's
+    contact solver (whose sweeps call their ``apply_normal_impulse`` and
+    ``apply_friction_impulse``; the block solver off, so that every normal impulse is
+    theirs).  The contacts are exact (each face on the one below, depth 0).  Returns
+    per step the boxes' (y, vy) and the accumulated normal impulse of each contact,
+    bottom first."""
+    import numpy as np
+    from exercises.body import Body
+    from exercises.contact import Contact
+    from exercises.response.contact_solver import ContactSolver, SolverSettings
+
+    ground = Body.box(10.0, 1.0, is_static=True, position=(0.0, -0.5), friction=0.6)
+    bodies = [ground] + [Body.box(1.0, 1.0, position=(0.0, 0.5 + k), friction=0.6) for k in range(count)]
+    solver = ContactSolver(SolverSettings(iterations=iterations, block_solver=False, position_correction="none",
+                                          restitution_threshold=0.0))
+    trajectory, impulses = [], []
+    for _ in range(steps):
+        for body in bodies[1:]:
+            body.velocity = body.velocity + dt * np.array([0.0, -9.81])
+        manifolds = []
+        for k in range(count):
+            top = float(bodies[k].position[1]) + 0.5
+            manifolds.append((k, k + 1, Contact((0.0, 1.0), 0.0, [(-0.5, top), (0.5, top)],
+                                                feature_ids=("left", "right"))))
+        solver.solve(bodies, manifolds, dt)
+        for body in bodies[1:]:
+            body.position = body.position + dt * body.velocity
+            body.angle += dt * body.angular_velocity
+        trajectory.append([[float(b.position[1]), float(b.velocity[1])] for b in bodies[1:]])
+        totals = [0.0] * count
+        for i, _, _, normal, _ in solver.contact_impulses:
+            totals[i] += float(normal)
+        impulses.append(totals)
+    return {"trajectory": trajectory, "impulses": impulses}

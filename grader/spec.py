@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 VISIBILITIES = ("visible", "hidden", "after_due_date", "after_published")
-EXERCISES = ("momentum", "grid", "quadtree", "sat", "contacts", "impulse")
+EXERCISES = ("momentum", "grid", "quadtree", "sat", "contacts", "impulse", "sequential")
 
 
 class SpecError(ValueError):

@@ -13,7 +13,8 @@ until the anchors' relative velocity along ``u`` is zero (plus a position bias).
   effective mass ``m`` of the joint (erratum 25 of the notes: zeta is not a stiffness).
 
 :class:`JointSolver` runs the velocity iterations over all joints, with warm starting
-(the accumulated impulses of the last step are applied first).  The world solves
+(the accumulated impulses of the last step are applied first); each joint is a row
+of the same solver kernel as the contacts (:mod:`solutions.solver.kernel`).  The world solves
 joints after contacts in each step.  Units: SI.
 """
 from __future__ import annotations
@@ -24,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .body import Body
+from .solver.constraint_rows import ConstraintRows
+from .solver.kernel import kernel
 
 
 @dataclass
@@ -71,7 +74,9 @@ def spring_coefficients(mass: float, frequency: float, damping_ratio: float) -> 
 
 
 class JointSolver:
-    """Sequential impulses over distance joints, with warm starting.
+    """Sequential impulses over distance joints, with warm starting: each joint is one
+    constraint row of the solver kernel (:func:`~solutions.solver.kernel.solve_constraints`),
+    bilateral (its impulse may pull as well as push), without friction.
 
     Parameters
     ----------
@@ -81,28 +86,42 @@ class JointSolver:
         Fraction of a rigid joint's length error fed back per step (dimensionless).
     warm_starting : bool
         Start from last step's accumulated impulses.
+    backend : str
+        ``"python"`` (the readable kernel) or ``"numba"`` (its compiled twin).
     """
 
-    def __init__(self, iterations: int = 10, baumgarte: float = 0.2, warm_starting: bool = True):
+    def __init__(self, iterations: int = 10, baumgarte: float = 0.2, warm_starting: bool = True,
+                 backend: str = "python"):
         self.iterations = int(iterations)
         self.baumgarte = float(baumgarte)
         self.warm_starting = warm_starting
+        self.backend = backend
         self.impulses: dict[int, float] = {}
 
     def solve(self, bodies: list[Body], joints: list[DistanceJoint], dt: float, use_bias: bool = True,
               softness: tuple[float, float, float] | None = None) -> None:
         """Apply the joint impulses of one step of ``dt`` (s) to the bodies' velocities.
 
-        The soft step (:mod:`~solutions.response.soft_step`) calls it twice per
-        sub-step: before the positions move with ``softness = (bias_rate, mass_scale,
-        impulse_scale)`` of :func:`~solutions.response.soft_step.soft_coefficients`,
-        which makes rigid joints stiff springs instead of Baumgarte rods, and after
-        with ``use_bias=False``: rigid joints without bias and without a second warm
-        start (the relax pass).  Spring joints are solved the same way in both calls.
+        Each joint is a row along ``u`` with ``K = 1/m_A + 1/m_B + (r_A x u)^2 / I_A +
+        (r_B x u)^2 / I_B`` and the kernel's update ``dP = (mass_scale / K) (target -
+        v_u) - impulse_scale P``:
+
+        - rigid rod, Baumgarte: ``target = -beta / dt * C``, scales ``(1, 0)``;
+        - rigid rod in the soft step (``softness = (bias_rate, mass_scale,
+          impulse_scale)`` of :func:`~solutions.response.soft_step.soft_coefficients`):
+          ``target = -bias_rate * C`` with those scales: a stiff spring instead of a
+          Baumgarte rod;
+        - spring joint (``frequency > 0``), Catto's soft constraint with ``gamma = 1 /
+          (dt (c + dt k))``: ``target = -dt k gamma C``, ``mass_scale = K / (K + gamma)``,
+          ``impulse_scale = gamma / (K + gamma)``;
+        - ``use_bias=False`` (the soft step's relax pass): rigid rods without bias and
+          without a second warm start; springs as above.
         """
         if not joints:
             return
-        rows = []
+        members: dict[int, int] = {}
+        columns: dict[str, list] = {name: [] for name in ConstraintRows.GROUP_FIELDS + ConstraintRows.ROW_FIELDS}
+        target, mass_scale, impulse_scale, total, which = [], [], [], [], []
         for k, joint in enumerate(joints):
             a, b = bodies[joint.a], bodies[joint.b]
             pa, pb = anchor_world(a, joint.anchor_a), anchor_world(b, joint.anchor_b)
@@ -121,41 +140,53 @@ class JointSolver:
                 k_spring, c_damp = spring_coefficients(1.0 / inverse, joint.frequency, joint.damping_ratio)
                 gamma = dt * (c_damp + dt * k_spring)
                 gamma = 1.0 / gamma if gamma > 0 else 0.0
-                bias = error * dt * k_spring * gamma
+                row = (-error * dt * k_spring * gamma, inverse / (inverse + gamma), gamma / (inverse + gamma))
             elif not use_bias:
-                gamma, bias = 0.0, 0.0
+                row = (0.0, 1.0, 0.0)
             elif softness is not None:
-                # -m mass_scale (v + bias_rate C) - impulse_scale P, written as
-                # -m' (v + bias + gamma P) with m' = m mass_scale, gamma = impulse_scale / m'.
-                bias_rate, mass_scale, impulse_scale = softness
-                gamma, bias = impulse_scale * inverse / mass_scale, bias_rate * error
+                bias_rate, soft_mass, soft_impulse = softness
+                row = (-bias_rate * error, soft_mass, soft_impulse)
             else:
-                gamma, bias = 0.0, self.baumgarte / dt * error
-            mass = 1.0 / (inverse + gamma) if softness is None or not use_bias or joint.frequency > 0 \
-                else softness[1] / inverse
-            accumulated = self.impulses.get(k, 0.0) if (self.warm_starting or not use_bias) else 0.0
-            rows.append([a, b, ux, uy, rax, ray, rbx, rby, mass, bias, gamma, accumulated, k])
-            if accumulated and use_bias:
-                self._apply(a, b, ux * accumulated, uy * accumulated, rax, ray, rbx, rby)
-        for _ in range(self.iterations):
-            for row in rows:
-                a, b, ux, uy, rax, ray, rbx, rby, mass, bias, gamma, accumulated, _ = row
-                vax = a.velocity[0] - a.angular_velocity * ray
-                vay = a.velocity[1] + a.angular_velocity * rax
-                vbx = b.velocity[0] - b.angular_velocity * rby
-                vby = b.velocity[1] + b.angular_velocity * rbx
-                speed = (vbx - vax) * ux + (vby - vay) * uy
-                impulse = -mass * (speed + bias + gamma * accumulated)
-                row[11] = accumulated + impulse
-                self._apply(a, b, ux * impulse, uy * impulse, rax, ray, rbx, rby)
-        self.impulses = {row[12]: row[11] for row in rows}
+                row = (-self.baumgarte / dt * error, 1.0, 0.0)
+            for index in (joint.a, joint.b):
+                members.setdefault(index, len(members))
+            group = dict(a=members[joint.a], b=members[joint.b], nx=ux, ny=uy, ima=a.inverse_mass,
+                         imb=b.inverse_mass, iia=a.inverse_inertia, iib=b.inverse_inertia, first=len(which),
+                         count=1, block=False, k11=0.0, k12=0.0, k22=0.0, rn_a=cra, rn_b=crb, rt_a=0.0, rt_b=0.0,
+                         mass_normal=1.0 / inverse, mass_tangent=0.0, friction=0.0, lower=-math.inf)
+            for name, value in group.items():
+                columns[name].append(value)
+            target.append(row[0])
+            mass_scale.append(row[1])
+            impulse_scale.append(row[2])
+            total.append(self.impulses.get(k, 0.0) if (self.warm_starting or not use_bias) else 0.0)
+            which.append(k)
+        if not which:
+            self.impulses = {}
+            return
+        rows = ConstraintRows(**{name: np.array(values) for name, values in columns.items()})
+        order = list(members)
+        velocity = np.array([(*bodies[i].velocity.tolist(), float(bodies[i].angular_velocity)) for i in order],
+                            dtype=float).reshape(-1, 3)
+        normal_total = np.array(total, dtype=float)
+        if use_bias:   # warm start: last step's impulses first
+            for g, impulse in enumerate(total):
+                if impulse:
+                    _apply(velocity, rows, g, impulse)
+        kernel(self.backend)(velocity, rows, self.iterations, normal_total, np.zeros(len(which)),
+                             np.array(target), np.array(mass_scale), np.array(impulse_scale), use_friction=False,
+                             use_block=False)
+        for row, index in enumerate(order):
+            body = bodies[index]
+            if not body.is_static:
+                body.velocity = velocity[row, :2].copy()
+                body.angular_velocity = float(velocity[row, 2])
+        self.impulses = dict(zip(which, normal_total.tolist()))
 
-    @staticmethod
-    def _apply(a: Body, b: Body, px: float, py: float, rax, ray, rbx, rby) -> None:
-        """Impulse (px, py) to B at its anchor, the opposite to A."""
-        if not a.is_static:
-            a.velocity = a.velocity - a.inverse_mass * np.array([px, py])
-            a.angular_velocity -= a.inverse_inertia * (rax * py - ray * px)
-        if not b.is_static:
-            b.velocity = b.velocity + b.inverse_mass * np.array([px, py])
-            b.angular_velocity += b.inverse_inertia * (rbx * py - rby * px)
+
+def _apply(velocity: np.ndarray, rows: ConstraintRows, g: int, impulse: float) -> None:
+    """Impulse ``impulse`` (N s) along group ``g``'s direction to B, the opposite to A."""
+    a, b = int(rows.a[g]), int(rows.b[g])
+    nx, ny = float(rows.nx[g]), float(rows.ny[g])
+    velocity[a] -= (rows.ima[g] * impulse * nx, rows.ima[g] * impulse * ny, rows.iia[g] * rows.rn_a[g] * impulse)
+    velocity[b] += (rows.imb[g] * impulse * nx, rows.imb[g] * impulse * ny, rows.iib[g] * rows.rn_b[g] * impulse)

@@ -6,7 +6,7 @@ every test "not implemented".  Each buggy sample fails exactly the tests its bug
 fail, each losing at least half its points (a systematic bug must, see
 :mod:`grader.credit`), except the tests it lists as weak, which lose some but less.
 
-The reference is graded as the probe (:func:`grader.example_class.grade_probe`): the
+The reference is graded as the probe (:func:`grader.samples.example_class.grade_probe`): the
 reference with each exercise function printing its code when it runs, which changes no
 answer, graded once per test run and shared by the xdist workers.  Besides full marks
 it tells which exercise functions each graded test reaches.  A buggy sample is graded
@@ -23,7 +23,7 @@ from pathlib import Path
 
 import pytest
 
-from grader.example_class import (ABOUT_FILE, BUGGY_SAMPLES, ERRATA, EXERCISES_DIR, PACKAGE, PROBE_HELPER,
+from grader.samples.example_class import (ABOUT_FILE, BUGGY_SAMPLES, ERRATA, EXERCISES_DIR, PACKAGE, PROBE_HELPER,
                                   PROBE_SAMPLE, SOLUTIONS_DIR, BuggySample, ExampleClassError, Replacement,
                                   build_buggy_sample, build_example_class, build_probe, exercise_functions_flat,
                                   find_function, grade_probe, minimum_points_lost, points_lost, reaching_tests,

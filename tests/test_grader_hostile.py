@@ -1,6 +1,6 @@
-"""The grader against broken and hostile submissions (grader/hostile_cases.py).
+"""The grader against broken and hostile submissions (grader/samples/hostile_cases.py).
 
-Every case of :mod:`grader.hostile_cases` is graded in ONE batch, with a clean copy of
+Every case of :mod:`grader.samples.hostile_cases` is graded in ONE batch, with a clean copy of
 the reference and of the stubs, through ``grade_submissions`` with two parallel jobs
 -- but the cases of ``hc.SIZES``, whose answers are enormous, which go to a second,
 small batch of their own tests, timed and with the grading process's peak memory
@@ -42,7 +42,7 @@ import numpy as np
 import pytest
 
 from grader import codec
-from grader import hostile_cases as hc
+from grader.samples import hostile_cases as hc
 from grader.grade import grade_submissions
 from grader.gradebook import LOG_NAME, read_grading_log
 from grader.results import check_results, write_results

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from grader import similarity as sim
-from grader.example_class import Replacement, replace_functions
+from grader.samples.example_class import Replacement, replace_functions
 
 REPO = Path(__file__).resolve().parent.parent
 IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc")

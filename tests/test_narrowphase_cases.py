@@ -19,8 +19,10 @@ from solutions.narrowphase.dispatch import collide, shapes_overlap
 from solutions.narrowphase.polygon_polygon import collide_polygon_polygon, obbs_overlap, polygons_overlap
 from solutions.narrowphase.projection import (edge_normals, interval_overlap_depth, intervals_overlap,
                                               project_circle, project_vertices)
+from solutions.narrowphase.speculative import speculative_polygon_manifold
 from solutions.shapes import AABB, OBB, Circle, ConvexPolygon, polygon_vertices
-from test_narrowphase_oracles import pymunk_contact, random_shape, rotate, signed_gap, translate
+from solutions.vector import rotation_matrix
+from test_narrowphase_oracles import contains, pymunk_contact, random_shape, rotate, signed_gap, translate
 
 FLT_MIN = 1.1754943508222875e-38   # C's FLT_MIN: the smallest *positive* normal float
 #: m: hand-computed geometry on shapes of about 1 m is exact to ~1e-15.
@@ -397,3 +399,170 @@ def test_feature_ids_of_equal_width_stacked_boxes_do_not_flicker():
         assert len(contact.points) == 2
         seen.add(frozenset(contact.feature_ids))
     assert len(seen) == 1
+
+
+# ------------------------------------------------------------- robustness (issue #12)
+def test_polygon_with_collinear_vertices_gives_the_manifold_of_its_corners():
+    # (1, 0) lies on the bottom edge: the polygon is the 2 m square.  A 0.6 m wide box
+    # sunk 5 cm into that edge between x = 1.2 and 1.8 touches it there: depth 0.05,
+    # points halfway down the overlap, (1.2, 0.025) and (1.8, 0.025), normal -y.
+    with_middle = ConvexPolygon([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]])
+    crate = OBB((1.5, -0.45), (0.3, 0.5), 0.0)
+    expected_points = np.array([[1.2, 0.025], [1.8, 0.025]])
+    for turn, shift in ((0.0, (0.0, 0.0)), (0.7, (-3.0, 2.0))):
+        polygon, box_ = translate(rotate(with_middle, turn), shift), translate(rotate(crate, turn), shift)
+        down = rotation_matrix(turn) @ (0.0, -1.0)                          # the normal, turned
+        points = expected_points @ rotation_matrix(turn).T + shift
+        results = [collide(polygon, box_), collide(box_, polygon).flipped(),
+                   speculative_polygon_manifold(polygon, box_)[0],
+                   speculative_polygon_manifold(box_, polygon)[0].flipped()]
+        for contact in results:
+            np.testing.assert_allclose(contact.normal, down, atol=ATOL)
+            assert contact.depth == pytest.approx(0.05, abs=ATOL)
+            np.testing.assert_allclose(contact.depths, [0.05, 0.05], atol=ATOL)
+            np.testing.assert_allclose(contact.points[np.lexsort(contact.points.T[::-1])],
+                                       points[np.lexsort(points.T[::-1])], atol=ATOL)
+
+
+def exactly_touching_pairs(rng, count):
+    """(name, A, B) built to touch exactly: coordinates are multiples of 1/64 m and
+    distances Pythagorean, so the shapes touch with no rounding in the construction."""
+    triples = ((3, 4, 5), (5, 12, 13), (8, 15, 17), (7, 24, 25), (20, 21, 29), (0, 1, 1), (1, 0, 1))
+    corner_signs = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1)], dtype=float)
+    face_normals = np.array([(0, -1), (1, 0), (0, 1), (-1, 0)], dtype=float)
+
+    def a_box(center, half):
+        kind = rng.integers(3)
+        shape = AABB(center - half, center + half)
+        return shape if kind == 0 else OBB(center, half, 0.0) if kind == 1 else ConvexPolygon(shape.vertices())
+
+    for _ in range(count):
+        center, half = rng.integers(-40, 41, 2) / 8, rng.integers(1, 17, 2) / 8
+        a, b, hypotenuse = triples[rng.integers(len(triples))]
+        scale = 2.0 ** -int(rng.integers(0, 4))
+        k = rng.integers(4)
+        corner = center + corner_signs[k] * half
+        away = corner_signs[k] * np.array([a, b]) * scale        # out of the box's corner
+        yield "circle on a box corner", Circle(corner + away, hypotenuse * scale), a_box(center, half)
+        n = face_normals[rng.integers(4)]
+        along = np.abs(n[::-1])
+        radius, slide = rng.integers(1, 17) / 8, rng.integers(-8, 9) / 8
+        yield "circle on a box face", Circle(center + n * (half + radius) + along * slide * (along @ half), radius), \
+            a_box(center, half)
+        other_half = rng.integers(1, 17, 2) / 8
+        slide = float(rng.choice([-1, 1])) if rng.integers(3) == 0 else rng.integers(-7, 8) / 8
+        yield "boxes sharing an edge or a corner", a_box(center, half), \
+            a_box(center + n * (half + other_half) + along * slide * (along @ (half + other_half)), other_half)
+        share = rng.integers(1, 8) / 8
+        offset = rng.choice([-1, 1], 2) * np.array([a, b]) * scale
+        yield "circles", Circle(center, share * hypotenuse * scale), Circle(center + offset, (1 - share) * hypotenuse * scale)
+        if a and b:     # right triangles with a slanted edge (a, -b) * size
+            size = scale * float(rng.choice([1, 2, 4]))
+            p = center + rng.integers(-8, 9, 2) / 8
+            triangle = ConvexPolygon([p, p + (a * size, 0), p + (0, b * size)])
+            yield "triangles sharing the slanted edge", triangle, \
+                ConvexPolygon([p + (a * size, 0), p + (a * size, b * size), p + (0, b * size)])
+            yield "triangles touching at a vertex", triangle, ConvexPolygon([2 * p - v for v in triangle.vertices])
+            # The slanted edge's outward normal is (b, a) / hypotenuse; j/8 of the way along it.
+            on_edge = p + (a * size, 0) + rng.integers(0, 9) / 8 * np.array([-a * size, b * size])
+            k = rng.integers(1, 5) / 4
+            yield "circle on a slanted face", Circle(on_edge + k * np.array([b, a]), k * hypotenuse), triangle
+            yield "circle on a triangle's vertex", Circle(p - np.array([a, b]) * size, hypotenuse * size), triangle
+
+
+def test_exactly_touching_pairs_touch_for_both_functions():
+    # Touching counts as colliding: shapes_overlap and collide must both say so, in
+    # either order, whatever rounding the unit axes of the yes/no test carry (with the
+    # unit axis to the nearest vertex, a circle on a box's corner used to be "apart"
+    # one time in four).
+    assert shapes_overlap(Circle((4.0, 5.0), 5.0), OBB((0.0, 0.0), (1.0, 1.0), 0.0))
+    seen = set()
+    for name, a, b in exactly_touching_pairs(np.random.default_rng(12), 300):
+        seen.add(name)
+        for first, second in ((a, b), (b, a)):
+            contact = collide(first, second)
+            assert shapes_overlap(first, second), (name, first, second)
+            assert contact is not None, (name, first, second)
+            assert contact.depth <= 1e-12, (name, first, second, contact)
+    assert len(seen) == 8
+
+
+def far_centimetre_pairs(offset: float, turn: float):
+    """Pairs of centimetre boxes overlapping by 1 mm near ``(offset, -offset / 2)``, built
+    in the frame of box A (turned by ``turn``), with their contact worked out by hand in
+    that frame: (A, B, unit normal from A to B, points), all in A's frame."""
+    origin = np.array([offset, -offset / 2])
+    frame = np.array([[math.cos(turn), -math.sin(turn)], [math.sin(turn), math.cos(turn)]])
+    h = 0.005
+    a = OBB(origin, (h, h), turn)
+
+    def b_box(centre, half, angle):
+        return OBB(origin + frame @ np.asarray(centre), (half, half), turn + angle)
+
+    up = np.array([0.0, 1.0])
+    # Face to face, B's bottom 1 mm below A's top and hanging 0.5 mm over A's right side:
+    # the side plane cuts B's face at x = h.  Points halfway between the faces.
+    yield a, b_box((0.0005, 0.009), h, 0.0), up, [(-0.0045, 0.0045), (h, 0.0045)]
+    # B turned 45 degrees, its lowest corner (0.001, 0.004) 1 mm deep: one point.
+    yield a, b_box((0.001, 0.004 + h * math.sqrt(2.0)), h, math.pi / 4), up, [(0.001, 0.0045)]
+    # B (half 4 mm) tilted so that its bottom corners are 1.1 mm apart in height: the
+    # left one 1 mm deep, the right one 0.1 mm above A's top: one point only.
+    tilt = math.asin(0.0011 / 0.008)
+    left_corner = np.array([-0.004, 0.004])
+    centre = left_corner + rotation_matrix(tilt) @ (0.004, 0.004)
+    yield a, b_box(centre, 0.004, tilt), up, [(-0.004, 0.0045)]
+    # B turned 40 degrees, its lowest corner q 1.1 mm deep under A's top face, and A's
+    # top-right corner c 1 mm deep under B's face through q whose outward normal is
+    # m = -(cos 40, sin 40): that face penetrates least, so it is the reference face,
+    # depth 1 mm, normal -m.  A's most opposed face is its right face (x = h): its
+    # points are c, and the cut of that face by the side plane through q (along m).
+    beta = math.radians(40.0)
+    m = -np.array([math.cos(beta), math.sin(beta)])
+    c = np.array([h, h])
+    q = np.array([h + (0.001 + m[1] * 0.0011) / m[0], h - 0.0011])       # -m . (c - q) = 1 mm
+    lowest_corner_offset = rotation_matrix(beta) @ (-h, -h)             # B's vertex 0, the lowest
+    cut = q + (h - q[0]) / m[0] * m                                     # on x = h, on the line q + s m
+    depth_at_cut = -float(m @ (cut - q))
+    yield a, b_box(q - lowest_corner_offset, h, beta), -m, [c + 0.0005 * m, cut + 0.5 * depth_at_cut * m]
+
+
+@pytest.mark.parametrize("offset", [0.0, 1e3, 1e6, 1e9])
+def test_centimetre_boxes_far_from_the_origin_give_the_depth_at_the_origin(offset):
+    # A coordinate of 1e9 m is known to 1.2e-7 m (one ulp): that rounding, a few times
+    # over, is all the error allowed.  The tolerances follow the boxes' size and the
+    # rounding of their coordinates, not 1e-12 of the coordinate (1 mm at 1e9 m, which
+    # kept points up to 1 mm outside the faces and preferred a face 10 % deeper).
+    rounding = 8 * np.spacing(max(offset, 1.0))
+    for turn in (0.0, 0.3, -2.0):
+        frame = np.array([[math.cos(turn), -math.sin(turn)], [math.sin(turn), math.cos(turn)]])
+        for a, b, normal, local_points in far_centimetre_pairs(offset, turn):
+            # The least penetration, by brute force on the same pair at the origin.
+            assert -signed_gap(translate(a, -a.center), translate(b, -a.center)) == pytest.approx(0.001, abs=rounding)
+            expected = a.center + np.array(local_points) @ frame.T
+            for contact in (collide(a, b), speculative_polygon_manifold(a, b, margin=0.0)[0],
+                            collide(b, a).flipped()):
+                np.testing.assert_allclose(contact.normal, frame @ normal, atol=1e-6)
+                assert contact.depth == pytest.approx(0.001, abs=rounding)
+                assert len(contact.points) == len(expected)
+                along = frame @ (-normal[1], normal[0])                   # sort along the reference face
+                got = contact.points[np.argsort((contact.points - a.center) @ along)]
+                want = expected[np.argsort((expected - a.center) @ along)]
+                np.testing.assert_allclose(got, want, rtol=0, atol=rounding)
+                for point in contact.points:
+                    assert contains(a, point, rounding) and contains(b, point, rounding)
+
+
+def test_largest_shapes_allowed_compare_squared_distances_without_overflow():
+    # Radii and coordinates up to MAX_COORDINATE = 1e150 m: squared distances stay finite.
+    big = 1e150
+    assert circles_overlap(Circle((-big, 0.0), 0.5 * big), Circle((big, 0.0), 0.5 * big)) is False
+    assert collide(Circle((-big, 0.0), 0.5 * big), Circle((big, 0.0), 0.5 * big)) is None
+    # Centres 0.5 * big apart (3-4-5), radii 0.6 + 0.4 times big: 0.5 * big deep.
+    overlapping = (Circle((0.0, 0.0), 0.6 * big), Circle((0.3 * big, 0.4 * big), 0.4 * big))
+    assert circles_overlap(*overlapping) and collide(*overlapping).depth == pytest.approx(0.5 * big, rel=1e-12)
+    corner = OBB((0.0, 0.0), (0.5 * big, 0.5 * big), 0.0)
+    ball = Circle((0.5 * big + 0.3 * big, 0.5 * big + 0.4 * big), 0.5 * big)     # exactly on the corner
+    assert shapes_overlap(ball, corner) and collide(ball, corner).depth == pytest.approx(0.0, abs=1e-12 * big)
+    assert not shapes_overlap(translate(ball, (0.01 * big, 0.0)), corner)
+    with pytest.raises(ValueError, match="at most 1e\\+150 m"):
+        Circle((0.0, 0.0), 1e154)

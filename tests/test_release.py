@@ -56,7 +56,7 @@ REPO = Path(__file__).resolve().parent.parent
 PYTHON = sys.executable
 SITE_PACKAGES = sysconfig.get_path("purelib")
 MIN_TOKENS = 8
-NEVER = ("grade.py", "gradebook.py", "scheduler.py", "isolation.py", "gradescope.py", "example_class.py", "hostile_cases.py", "similarity.py", "report.py",
+NEVER = ("grade.py", "gradebook.py", "scheduler.py", "isolation.py", "gradescope.py", "samples/", "similarity.py", "report.py",
          "release.py")
 #: Python of this .venv without the repository's editable install (see the docstring).
 STUDENT_PRELUDE = (f"import sys; sys.prefix = sys.exec_prefix = {sys.prefix!r}; "
@@ -333,7 +333,7 @@ CLASSIC_BUGS = ("restitution-sign", "grid-own-cell", "quadtree-drops-straddling"
 def test_student_grader_loses_exactly_the_expected_tests_on_classic_bugs(release, tmp_path):
     """Classic bugs of the example class, one or more per exercise: the student edition's
     check fails exactly the public tests each bug must fail, as the instructor's does."""
-    from grader.example_class import BUGGY_SAMPLES, build_buggy_sample
+    from grader.samples.example_class import BUGGY_SAMPLES, build_buggy_sample
     from grader.spec import load_spec
 
     public = {t.name for t in load_spec() if t.public}

@@ -65,3 +65,45 @@ def test_shapes_are_immutable():
     c = Circle((0, 0), 1)
     with pytest.raises(ValueError):
         c.center[0] = 5.0
+
+
+def test_repeated_and_collinear_vertices_are_dropped():
+    square = [[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]]
+    # Midpoints of edges, a repeated corner, three vertices along the top edge.
+    padded = ConvexPolygon([[0, 0], [1, 0], [2, 0], [2, 2], [2, 2], [1.5, 2], [0.5, 2], [0, 2], [0, 1]])
+    assert padded.vertices.tolist() == square
+    # The same far from the origin and turned: the middle vertex is on the edge only up
+    # to the rounding of coordinates of 1e9 m (1.2e-7 m), and is still dropped.
+    turn = np.array([[math.cos(0.3), -math.sin(0.3)], [math.sin(0.3), math.cos(0.3)]])
+    corners = np.array([[0.0, 0.0], [0.02, 0.0], [0.02, 0.01], [0.0, 0.01]]) @ turn.T + [1e9, -2e9]
+    with_middle = np.insert(corners, 1, (corners[0] + corners[1]) / 2, axis=0)
+    assert len(ConvexPolygon(with_middle).vertices) == 4
+    # A corner that is a real corner is kept, however blunt: 1e-6 m off a 2 m chord.
+    blunt = ConvexPolygon([[0, 0], [1, -1e-6], [2, 0], [2, 2], [0, 2]])
+    assert len(blunt.vertices) == 5
+    # Area and centroid do not change.
+    assert signed_area(padded.vertices) == 4.0
+    np.testing.assert_allclose(polygon_centroid(padded.vertices), (1.0, 1.0), atol=1e-15)
+    # A spike (an edge that turns back on itself) is not convex.
+    with pytest.raises(ValueError, match="not convex"):
+        ConvexPolygon([[0, 0], [2, 0], [1, 0], [1, 1]])
+
+
+@pytest.mark.parametrize("make, name", [
+    (lambda big: Circle((0, 0), big), "circle radius"),
+    (lambda big: Circle((big, 0), 1), "circle center"),
+    (lambda big: AABB((0, -big), (1, 1)), "AABB min_corner"),
+    (lambda big: AABB.from_center((0, 0), (big, 1)), "AABB half-extent"),
+    (lambda big: OBB((0, 0), (1, big), 0.3), "OBB half-extent"),
+    (lambda big: OBB((0, big), (1, 1), 0.3), "OBB center"),
+    (lambda big: ConvexPolygon([[0, 0], [big, 0], [0, big]]), "polygon vertices"),
+])
+def test_sizes_whose_squares_overflow_are_refused(make, name):
+    # Two circles of radius 1e154 reach 2e154, whose square is inf: they would "touch"
+    # circles far outside them.
+    assert 2e154 * 2e154 == math.inf
+    with pytest.raises(ValueError, match=f"{name} must be at most 1e\\+150 m"):
+        make(1e154)
+    with pytest.raises(ValueError, match=name):
+        make(2e150)
+    make(1e150)     # the largest size allowed builds

@@ -18,8 +18,10 @@ from solutions.body import Body
 from solutions.contact import Contact
 from solutions.narrowphase.speculative import speculative_polygon_manifold
 from solutions.response.contact_solver import SolverSettings
-from solutions.response.soft_step import (BodyStates, SoftStepSolver, colour_groups, colour_order, soft_coefficients,
-                                         soft_sweeps, soft_sweeps_batched)
+from solutions.response.soft_step import BodyStates, SoftStepSolver, soft_coefficients
+from solutions.solver import kernel_numba
+from solutions.solver.constraint_rows import ConstraintRows
+from solutions.solver.kernel import solve_constraints
 from solutions.scenes import get_scene, ground
 from solutions.world import World, WorldSettings
 
@@ -133,12 +135,17 @@ def test_soft_block_update_is_the_scaled_rigid_lcp_solution(b, mass_scale):
     # Velocities that give normal velocities b + target + K old at the two points.
     normal_velocity = np.array(b) + target + k @ old
     vy, w = normal_velocity.mean(), (normal_velocity[1] - normal_velocity[0]) / 1.0
-    points = [(0, -0.5, -0.5, 0.0, 0.0, 1 / k11, 1.0, 0.0), (1, 0.5, 0.5, 0.0, 0.0, 1 / k22, 1.0, 0.0)]
-    program = [(0, 1, 0.0, 1.0, 0.0, 1.0, 0.0, 6.0, [(p[0], 0.0, p[1], 0.0, 0.0, p[5], p[6], 0.0) for p in points],
-                (k11, k12, k22))]
+    # Body 0 static ground, body 1 the box (1/m = 1, 1/I = 6); one block group, normal up.
+    rows = ConstraintRows(a=np.array([0]), b=np.array([1]), nx=np.array([0.0]), ny=np.array([1.0]),
+                          ima=np.array([0.0]), imb=np.array([1.0]), iia=np.array([0.0]), iib=np.array([6.0]),
+                          first=np.array([0]), count=np.array([2]), block=np.array([True]), k11=np.array([k11]),
+                          k12=np.array([k12]), k22=np.array([k22]), rn_a=np.zeros(2), rn_b=np.array([-0.5, 0.5]),
+                          rt_a=np.zeros(2), rt_b=np.zeros(2), mass_normal=np.array([1 / k11, 1 / k22]),
+                          mass_tangent=np.ones(2), friction=np.zeros(2), lower=np.zeros(2))
     normal = old.copy()
-    velocity = soft_sweeps(np.array([[0.0, 0.0, 0.0], [0.0, vy, w]]), program, 1, normal, np.zeros(2),
-                           target, np.full(2, mass_scale), np.full(2, 1.0 - mass_scale), friction=False)
+    velocity = np.array([[0.0, 0.0, 0.0], [0.0, vy, w]])
+    solve_constraints(velocity, rows, 1, normal, np.zeros(2), target, np.full(2, mass_scale),
+                      np.full(2, 1.0 - mass_scale), use_friction=False)
     (want,) = lcp_solutions(k, np.array(b))
     np.testing.assert_allclose(normal, mass_scale * want, rtol=1e-12, atol=1e-15)
     # The velocities moved by exactly the change of impulse.
@@ -148,27 +155,25 @@ def test_soft_block_update_is_the_scaled_rigid_lcp_solution(b, mass_scale):
 
 
 @pytest.mark.parametrize("seed", [0, 1])
-def test_batched_sweeps_match_the_loop_in_colour_order(seed):
-    # A settled pyramid's contacts, random soft scales and targets, warm impulses.
+def test_the_numba_twin_equals_the_readable_kernel_on_soft_rows(seed):
+    # A settled pyramid's contacts (colour order: it has more than 256 manifolds),
+    # random soft scales and targets, warm impulses.
     _, world = scene_world("pyramid_10")
     run(world, 0.2)
-    solver = world.solver
-    c = solver._contacts
+    c = world.solver._contacts
+    assert c.rows.block.any() and c.rows.group_count > 100
     rng = np.random.default_rng(seed)
     target, mass_scale = rng.uniform(-0.05, 0.05, c.point_count), rng.uniform(0.3, 1.0, c.point_count)
     normal, tangent = rng.uniform(0.0, 0.2, c.point_count), rng.uniform(-0.02, 0.02, c.point_count)
     velocity = rng.normal(0.0, 0.1, (len(c.members), 3)) * np.array([not b.is_static for b in c.members])[:, None]
-    groups = colour_groups(solver._program, c.ima, c.imb, c.a, c.b)
-    assert len(groups) < len(solver._program) / 5                     # real batches
-    assert any(group.block for group in groups)
-    got_normal, got_tangent = normal.copy(), tangent.copy()
-    got = soft_sweeps_batched(velocity, groups, 3, got_normal, got_tangent, target, mass_scale, 1.0 - mass_scale)
-    want_normal, want_tangent = normal.copy(), tangent.copy()
-    want = soft_sweeps(velocity, colour_order(solver._program, c.ima, c.imb, c.a, c.b), 3, want_normal,
-                       want_tangent, target, mass_scale, 1.0 - mass_scale, friction=True)
-    np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-12)
-    np.testing.assert_allclose(got_normal, want_normal, rtol=1e-10, atol=1e-13)
-    np.testing.assert_allclose(got_tangent, want_tangent, rtol=1e-10, atol=1e-13)
+    results = []
+    for solve in (solve_constraints, kernel_numba.solve_constraints):
+        v, n, tt = velocity.copy(), normal.copy(), tangent.copy()
+        solve(v, c.rows, 3, n, tt, target, mass_scale, 1.0 - mass_scale)
+        results.append((v, n, tt))
+    for got, want in zip(results[1], results[0]):
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-14)
+    assert not np.allclose(results[0][0], velocity)       # the sweeps did something
 
 
 # --- Speculative points and separations ------------------------------------------------

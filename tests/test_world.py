@@ -173,3 +173,35 @@ def test_every_named_scene_builds_and_steps():
 def test_unknown_scene_lists_the_known_ones():
     with pytest.raises(ValueError, match="known scenes: .*stack_10"):
         get_scene("stack_11")
+
+
+def test_auto_broad_phase_takes_the_fastest_measured_method(monkeypatch):
+    # Measured by bench/bench_auto_broad_phase.py: all pairs directly only for 2 bodies
+    # and for scenes of circles only up to 40; the brute-force AABB test for other scenes
+    # below 80 bodies; the numpy grid from 80 on.  The old rule (all pairs below 16
+    # bodies, the numpy grid above) took the slowest method for chapter 11's 4 balls
+    # among 4 walls and for 4 to 12 scattered boxes.
+    def boxes(n):
+        return [Body.box(0.5, 0.5, mass=1.0, position=(1.0 * (k % 8), 1.0 * (k // 8))) for k in range(n)]
+
+    def balls(n):
+        return [Body.circle(0.2, mass=1.0, position=(1.0 * (k % 8), 1.0 * (k // 8))) for k in range(n)]
+
+    cases = [(boxes(2), "all_pairs"), (balls(40), "all_pairs"), (balls(41), "brute_force"),
+             (balls(39) + boxes(1), "brute_force"), (boxes(3), "brute_force"), (boxes(79), "brute_force"),
+             (boxes(80), "numpy_grid"), (get_scene("stack_10").make_bodies(), "brute_force"),
+             (get_scene("many_uniform").make_bodies(), "numpy_grid")]
+    for bodies, expected in cases:
+        called = []
+        for name in ("pairs_brute_force", "pairs_grid_numpy", "pairs_uniform_grid", "pairs_quadtree"):
+            real = getattr(world_module, name)
+            monkeypatch.setattr(world_module, name,
+                                lambda *args, real=real, name=name, **kwargs: called.append(name) or real(*args, **kwargs))
+        auto = World(bodies, WorldSettings(gravity=(0.0, 0.0)))
+        shapes = auto.world_shapes()
+        found = {(i, j) for i, j, _ in auto.narrow_phase(shapes, auto.broad_phase(shapes))}
+        assert called == ({"all_pairs": [], "brute_force": ["pairs_brute_force"],
+                           "numpy_grid": ["pairs_grid_numpy"]}[expected]), (len(bodies), expected, called)
+        every = World(bodies, WorldSettings(gravity=(0.0, 0.0), broad_phase="all_pairs"))
+        assert found == {(i, j) for i, j, _ in every.narrow_phase(shapes, every.broad_phase(shapes))}
+        monkeypatch.undo()

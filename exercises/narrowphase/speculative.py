@@ -28,7 +28,8 @@ import numpy as np
 from ..contact import Contact
 from ..shapes import AABB, OBB, ConvexPolygon
 from .polygon_polygon import (KEEP_POINT_TOL, REFERENCE_FACE_ABSOLUTE_TOL, REFERENCE_FACE_RELATIVE_TOL,
-                              clip_segment_to_half_plane, incident_face, max_face_separation, polygon_faces)
+                              clip_segment_to_half_plane, incident_face, max_face_separation, polygon_faces,
+                              tolerance_scale)
 
 #: Box2D's speculative distance, 4 times its linear slop of 5 mm (m).
 SPECULATIVE_MARGIN = 0.02
@@ -74,7 +75,7 @@ def speculative_polygon_manifold(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | 
     separation_b, face_b = max_face_separation(*polygon_b, polygon_a[0])
     if separation_b > margin:
         return None
-    scale = max(float(np.max(np.abs(polygon_a[0]))), float(np.max(np.abs(polygon_b[0]))))
+    scale = tolerance_scale(polygon_a[0], polygon_b[0])      # for the rounding tolerances
     b_clearly_better = separation_b > (separation_a + REFERENCE_FACE_RELATIVE_TOL * abs(separation_a)
                                        + REFERENCE_FACE_ABSOLUTE_TOL * scale)
     if b_clearly_better:

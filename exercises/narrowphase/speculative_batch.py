@@ -24,7 +24,7 @@ answer for every pair, up to floating rounding:
    (:data:`~solutions.narrowphase.polygon_polygon.REFERENCE_FACE_RELATIVE_TOL` of A's
    separation plus
    :data:`~solutions.narrowphase.polygon_polygon.REFERENCE_FACE_ABSOLUTE_TOL` times
-   the largest absolute corner coordinate of the two boxes).
+   the pair's :func:`~solutions.narrowphase.polygon_polygon.tolerance_scale`).
 4. *Incident face*: the other box's face whose normal is most anti-parallel.
 5. *Clipping* by the two side planes of the reference face (one Sutherland-Hodgman
    step each, with the roundoff tolerance
@@ -49,7 +49,7 @@ import numpy as np
 from ..contact import Contact
 from ..shapes import AABB, OBB
 from .batch_sat import _as_array
-from .polygon_polygon import KEEP_POINT_TOL, REFERENCE_FACE_ABSOLUTE_TOL, REFERENCE_FACE_RELATIVE_TOL
+from .polygon_polygon import KEEP_POINT_TOL, REFERENCE_FACE_ABSOLUTE_TOL, REFERENCE_FACE_RELATIVE_TOL, tolerance_scale
 from .speculative import SPECULATIVE_MARGIN
 
 
@@ -220,8 +220,7 @@ def speculative_box_manifolds(centre_a, half_a, angle_a, centre_b, half_b, angle
     separation_a, face_a = _max_face_separation(vertices_a, normals_a, vertices_b)
     separation_b, face_b = _max_face_separation(vertices_b, normals_b, vertices_a)
     close = (separation_a <= margin) & (separation_b <= margin)
-    scale = np.maximum(np.abs(vertices_a).max(axis=(1, 2), initial=0.0),
-                       np.abs(vertices_b).max(axis=(1, 2), initial=0.0))
+    scale = tolerance_scale(vertices_a, vertices_b)          # (m,), for the rounding tolerances
     b_ref = separation_b > (separation_a + REFERENCE_FACE_RELATIVE_TOL * np.abs(separation_a)
                             + REFERENCE_FACE_ABSOLUTE_TOL * scale)
 

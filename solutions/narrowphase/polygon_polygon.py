@@ -38,7 +38,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..contact import Contact
-from ..shapes import AABB, OBB, ConvexPolygon, polygon_vertices
+from ..shapes import AABB, OBB, ROUNDOFF_SIZE_RTOL, ConvexPolygon, polygon_vertices, rounding_tolerance
 from .projection import (box_axes, edge_normals, intervals_overlap, nonzero_edges, project_vertices,
                          separating_axis_candidates)
 
@@ -48,15 +48,42 @@ from .projection import (box_axes, edge_normals, intervals_overlap, nonzero_edge
 #: the small tilts of a box resting on another one.
 REFERENCE_FACE_RELATIVE_TOL = 0.02
 
-#: ...plus this fraction of the largest vertex coordinate (m per m), a few thousand
-#: times the roundoff of a separation, so that an exact tie (two identical boxes) is
-#: decided the same way at the origin and at x = 1e6.
-REFERENCE_FACE_ABSOLUTE_TOL = 1e-12
+#: ...plus this fraction of the pair's tolerance scale (m per m, :func:`tolerance_scale`):
+#: the rounding of a separation, so that an exact tie (two identical boxes) is decided
+#: the same way at the origin and at x = 1e6.
+REFERENCE_FACE_ABSOLUTE_TOL = ROUNDOFF_SIZE_RTOL
 
-#: A clipped point is kept if it lies at most this fraction of the largest vertex
-#: coordinate (m per m) above the reference face, again a few thousand times the
-#: roundoff: two parallel faces that touch give both of their points.  Its depth is 0.
-KEEP_POINT_TOL = 1e-12
+#: A clipped point is kept if it lies at most this fraction of the pair's tolerance
+#: scale (m per m, :func:`tolerance_scale`) above the reference face or beyond a side
+#: plane, the rounding of a clipped point: two parallel faces that touch give both of
+#: their points.  Its depth is 0.
+KEEP_POINT_TOL = ROUNDOFF_SIZE_RTOL
+
+
+def tolerance_scale(vertices_a, vertices_b) -> float | np.ndarray:
+    """Length (m) whose :data:`KEEP_POINT_TOL` part is the pair's rounding tolerance.
+
+    ``KEEP_POINT_TOL * tolerance_scale(a, b)`` is
+    :func:`~solutions.shapes.rounding_tolerance` of the pair: a few ulps of its largest
+    coordinate plus 1e-12 of its size (the larger extent of the two polygons).  So the
+    tolerances follow the shapes: centimetre boxes get 1e-14 m at the origin and 1.8e-6 m
+    at x = 1e9 m (where a coordinate is only known to 1.2e-7 m), never millimetres.
+
+    Parameters
+    ----------
+    vertices_a, vertices_b : array_like, shape (..., n, 2)
+        Vertices of the two polygons (m); leading axes hold many pairs (one scale each).
+
+    Examples
+    --------
+    >>> square = np.array([[0.0, 0.0], [0.01, 0.0], [0.01, 0.01], [0.0, 0.01]])
+    >>> [f"{KEEP_POINT_TOL * tolerance_scale(square + x, square + x):.1e}" for x in (0.0, 1e9)]
+    ['1.0e-14', '1.8e-06']
+    """
+    a, b = np.asarray(vertices_a, dtype=float), np.asarray(vertices_b, dtype=float)
+    size = np.maximum(np.ptp(a, axis=-2).max(axis=-1), np.ptp(b, axis=-2).max(axis=-1))
+    coordinates = np.maximum(np.abs(a).max(axis=(-2, -1)), np.abs(b).max(axis=(-2, -1)))
+    return rounding_tolerance(coordinates, size) / KEEP_POINT_TOL
 
 
 def polygon_faces(shape: AABB | OBB | ConvexPolygon) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -64,7 +91,8 @@ def polygon_faces(shape: AABB | OBB | ConvexPolygon) -> tuple[np.ndarray, np.nda
 
     Face ``k`` runs from vertex ``k`` to vertex ``k+1``.  A box has four faces whose
     normals come from its angle, so even a zero-width box (a segment or a point) has
-    all of them; a ConvexPolygon drops its zero-length edges (repeated vertices).
+    all of them; a ConvexPolygon has one face per edge (it drops repeated and collinear
+    vertices when it is built, so no two faces share a direction).
 
     Returns
     -------
@@ -266,7 +294,8 @@ def reference_face_manifold(ref_vertices: np.ndarray, ref_normal: np.ndarray, re
     ref_name : str
         ``"A"`` or ``"B"``, the first entry of every feature id.
     scale : float
-        Size of the coordinates (m), for the roundoff tolerance.
+        The pair's tolerance scale (m, :func:`tolerance_scale`): points up to
+        ``KEEP_POINT_TOL * scale`` beyond a side plane or above the face are on it.
 
     Returns
     -------
@@ -360,7 +389,7 @@ def collide_polygon_polygon(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | Conve
     if separation_b > 0.0:
         return None
 
-    scale = max(float(np.max(np.abs(polygon_a[0]))), float(np.max(np.abs(polygon_b[0]))))
+    scale = tolerance_scale(polygon_a[0], polygon_b[0])      # for the rounding tolerances
     from_a = ("A", separation_a, face_a, polygon_a, polygon_b)
     from_b = ("B", separation_b, face_b, polygon_b, polygon_a)
     # Prefer A: B takes the reference role only if its face is clearly better, or if

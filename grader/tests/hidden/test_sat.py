@@ -135,7 +135,7 @@ def random_batches() -> dict:
     }
     out = {}
     for (module, function), kinds in batches.items():
-        pairs = [p for kind in kinds for offset in offsets for p in kind_pairs(rng, kind, 40, offset)]
+        pairs = [p for kind in kinds for offset in offsets for p in kind_pairs(rng, kind, 20, offset)]
         if function in ("obbs_overlap", "polygons_overlap"):
             pairs += [cases.random_one_side(rng, offset=offsets[k % 4]) for k in range(30)]
             pairs += [(b, a) for a, b in pairs[-30:]]

@@ -2,7 +2,7 @@
 
 Student code is untrusted: a student may be careless, or may try to raise a score
 without doing the work.  Each :class:`HostileCase` below is one such submission, built
-like the samples of :mod:`grader.example_class`:
+like the samples of :mod:`grader.samples.example_class`:
 
 - on the **reference** (a copy of ``solutions/`` as ``exercises/``) with one function or
   module replaced by the broken or hostile code: it must earn exactly the points of
@@ -33,7 +33,7 @@ for), ``@@OUT@@`` (the grader's output folder), ``@@SENTINEL@@`` (a folder the
 hostile code tries to write into, which must stay unchanged) and ``@@KEY@@`` (the
 description of the kernel key one case stores and a later one looks for).
 
-    python -m grader.hostile_cases --out DIR [--grading-out OUT] [--sentinel FOLDER]
+    python -m grader.samples.hostile_cases --out DIR [--grading-out OUT] [--sentinel FOLDER]
 
 writes every case into ``DIR`` (one folder or zip each) and prints the table of cases.
 """
@@ -1158,14 +1158,14 @@ def table(cases: tuple[HostileCase, ...] = CASES, tests=None) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m grader.hostile_cases", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m grader.samples.hostile_cases", description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, required=True, help="folder to write the cases into")
     parser.add_argument("--grading-out", default="/nonexistent-output",
                         help="the --out folder of the grading (the cases that write there aim at it)")
     parser.add_argument("--sentinel", default="/nonexistent-sentinel", help="folder the hostile writes aim at")
     args = parser.parse_args(argv)
     paths = build_cases(args.out, {"OUT": args.grading_out, "SENTINEL": args.sentinel})
-    from .spec import load_spec
+    from ..spec import load_spec
 
     print(table(tests=load_spec()))
     print(f"\nwrote {len(paths)} cases to {args.out}")

@@ -1,0 +1,8 @@
+"""The solver core: constraint rows, the one solver kernel that solves them (sequential
+impulses, rigid or soft) and its compiled twin, and the order in which it visits them.
+
+- :mod:`.constraint_rows`: what the kernel needs of each contact point and joint.
+- :mod:`.kernel`: :func:`~.kernel.solve_constraints`, the readable loop (the teaching text).
+- :mod:`.kernel_numba`: the same loop compiled by numba (imported only when asked for).
+- :mod:`.sweep_order`: the Gauss-Seidel order of the groups.
+"""

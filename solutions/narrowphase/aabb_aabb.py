@@ -9,8 +9,10 @@ numbered as in :mod:`solutions.shapes`: 0 faces -y, 1 +x, 2 +y, 3 -x; the first 
 a tie).  Faces of two AABBs are always parallel, so the manifold is the overlap of the
 two faces: 2 points (1 if the overlap is a single point, as when corners touch), on
 the line halfway between A's face and B's opposite face.  Feature ids use the same
-scheme as :func:`solutions.narrowphase.polygon_polygon.collide_polygon_polygon`, which
-gives the same contact for two AABBs.
+scheme as :func:`solutions.narrowphase.polygon_polygon.collide_polygon_polygon`
+(``("A", reference face, incident face, B's vertex)``), which gives the same contact
+for two AABBs, except where the faces share a single point: that point keeps the id of
+the incident face's first vertex, ``(face + 2) % 4``.
 """
 from __future__ import annotations
 

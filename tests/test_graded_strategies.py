@@ -42,8 +42,14 @@ def touching_on_cell_lines(example) -> bool:
 
 
 def at_negative_coordinates(example) -> bool:
+    """Boxes at negative coordinates, none of them only touching another."""
     boxes, _ = example
-    return bool(boxes) and all(v < 0 for box in boxes for v in box)
+    return (bool(boxes) and all(v < 0 for box in boxes for v in box)
+            and not any(only_touch(a, b) and not overlap_area(a, b) for a, b in itertools.combinations(boxes, 2)))
+
+
+def overlap_area(a, b) -> bool:
+    return min(a[2], b[2]) > max(a[0], b[0]) and min(a[3], b[3]) > max(a[1], b[1])
 
 
 def wide_box_with_a_far_partner(example) -> bool:

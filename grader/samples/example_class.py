@@ -270,9 +270,8 @@ GRID_STRICT_TOUCHING = BuggySample(
         "grid.every_cell_special_cases",
         "grid.every_cell_on_cell_lines",
         "grid.every_cell_hard_cases",
-        # Not failed: random boxes (they never touch exactly); the negative-cells
-        # category draws touching boxes too, but its 30 Hypothesis examples hold no
-        # touching pair (with 60 examples it failed).
+        # Not failed: random boxes and the negative-cells category (their boxes never
+        # touch exactly).
     }),
 )
 

@@ -134,7 +134,8 @@ def touching_on_cell_lines(draw, max_cells: int = 3):
 def negative_cells(draw):
     """(boxes, cell): boxes at negative coordinates only.  Most lie inside one cell (1/8
     to 7/8 of it, so boxes sharing a cell overlap at its centre and boxes in different
-    cells are apart); the first cell holds at least two.  Up to two boxes span cells."""
+    cells are apart); the first cell holds at least two.  Up to two boxes span cells.
+    No two boxes only touch."""
     cell = draw(CELLS)
     eighth = cell / 8
     where = draw(st.lists(st.tuples(st.integers(-5, -1), st.integers(-5, -1)), min_size=1, max_size=4, unique=True))
@@ -146,10 +147,15 @@ def negative_cells(draw):
             lo_x, lo_y, hi_x, hi_y = 1 + code % 3, 1 + code // 3 % 3, 5 + code // 9 % 3, 5 + code // 27
             boxes.append([(8 * cx + lo_x) * eighth, (8 * cy + lo_y) * eighth,
                           (8 * cx + hi_x) * eighth, (8 * cy + hi_y) * eighth])
+    # Boxes spanning cells, in sixteenths: minima 1 and maxima 3 (mod 4), so no edge of
+    # one ever lies on an edge of another (the cell boxes' edges are even sixteenths):
+    # this category never holds a pair that only touches (other categories test those).
+    sixteenth = cell / 16
     for _ in range(draw(st.integers(0, 2))):
-        x0, y0 = draw(st.integers(-40, -2)), draw(st.integers(-40, -2))
+        x0, y0 = draw(st.integers(-20, -1)), draw(st.integers(-20, -1))
         x1, y1 = draw(st.integers(x0, -1)), draw(st.integers(y0, -1))
-        boxes.append([x0 * eighth, y0 * eighth, x1 * eighth, y1 * eighth])
+        boxes.append([(4 * x0 + 1) * sixteenth, (4 * y0 + 1) * sixteenth, (4 * x1 + 3) * sixteenth,
+                      (4 * y1 + 3) * sixteenth])
     return arranged(draw, boxes), cell
 
 

@@ -2,9 +2,11 @@
 
 tools/generate_exercises.py turns each ``### BEGIN SOLUTION`` ... ``### END SOLUTION``
 block into ``raise NotImplementedError``; tests/test_generate_exercises.py checks the
-markers and stubs of the whole package.  Here: exactly the response exercises are
-stubbed, and what students are given unmarked (helpers, the ContactSolver that a
-world steps with) still works in their copy.
+markers and stubs of the whole package.  Here: exactly the response and solver
+exercises are stubbed, and what students are given unmarked (helpers, the
+ContactSolver that a world steps with) works in their copy: its readable sweeps call
+the sequential-impulse exercise (and say so until it is written), its compiled twin
+needs nothing of theirs.
 """
 import importlib
 import sys
@@ -19,6 +21,7 @@ STUBBED = {
     "exercises.response.impulse": {"relative_normal_velocity", "effective_mass_inverse", "normal_impulse_magnitude",
                                    "apply_impulse", "resolve_collision"},
     "exercises.response.positional_correction": {"correct_positions"},
+    "exercises.solver.contact_point": {"apply_normal_impulse", "apply_friction_impulse"},
 }
 
 
@@ -43,7 +46,7 @@ def student_package(tmp_path_factory):
 def test_exactly_the_response_exercises_are_stubbed(student_package):
     made = {}
     for stub in student_package:
-        if stub.module.startswith("exercises.response."):
+        if stub.module.startswith(("exercises.response.", "exercises.solver.")):
             made.setdefault(stub.module, set()).add(stub.qualname)
     assert made == STUBBED  # ContactSolver and the helpers stay whole
 
@@ -66,6 +69,8 @@ def test_student_copy_raises_in_exercises_and_runs_the_solver(student_package):
             call()
     assert momentum_1d.kinetic_energy(2.0, 3.0) == 9.0
     assert impulse.solve_small_lcp(np.array([[2.0]]), np.array([1.0])).tolist() == [0.5]
-    solver = contact_solver.ContactSolver()
+    with pytest.raises(NotImplementedError, match="grader check sequential"):
+        contact_solver.ContactSolver().solve([ground, ball], [(0, 1, touching)], 1 / 60)
+    solver = contact_solver.ContactSolver(backend="numba")
     solver.solve([ground, ball], [(0, 1, touching)], 1 / 60)
     assert np.abs(ball.velocity).max() < 1e-12

@@ -345,9 +345,14 @@ def pytest_addoption(parser):
                     help="wall-clock seconds one call into the student's code may take")
 
 
-def pytest_configure(config):
+def register_markers(config) -> None:
+    """Declare the graded tests' markers (the table :data:`MARKERS`) to pytest."""
     for name, text in MARKERS.items():
         config.addinivalue_line("markers", f"{name}: {text}" if not text.startswith(name) else text)
+
+
+def pytest_configure(config):
+    register_markers(config)
     register_hypothesis_profile()
     if not any(isinstance(p, GradedRun) for p in config.pluginmanager.get_plugins()):
         student = config.getoption("--student")

@@ -144,6 +144,26 @@ def solve_constraints(velocity: np.ndarray, rows: ConstraintRows, iterations: in
             points[k] = ContactPoint(nx_of[g], ny_of[g], rn_a[k], rn_b[k], rt_a[k], rt_b[k], ima_of[g], imb_of[g],
                                      iia_of[g], iib_of[g], mass_normal[k], mass_tangent[k], mu_of[k], lower_of[k])
 
+    # One row's friction visit; it reads the group's nx, ny and inverse masses, which the
+    # loop below sets before calling it (defined once, not once per group and sweep).
+    def friction(k, vxa, vya, wa, vxb, vyb, wb):
+        """Row k's tangent impulse along t = (ny, -nx), within the Coulomb bound."""
+        mu = mu_of[k]
+        if not use_friction or mu == 0.0:
+            return vxa, vya, wa, vxb, vyb, wb
+        if accumulate:
+            (vxa, vya, wa), (vxb, vyb, wb), tangent[k] = apply_friction_impulse(
+                (vxa, vya, wa), (vxb, vyb, wb), points[k], normal[k], tangent[k])
+            return vxa, vya, wa, vxb, vyb, wb
+        # Clamped increments: bounded by this sweep's normal increment, not the total.
+        tangent_velocity = (vxb - vxa) * ny - (vyb - vya) * nx + wb * rt_b[k] - wa * rt_a[k]
+        change = -mass_tangent[k] * tangent_velocity
+        bound = mu * normal_change[k]
+        change = min(max(change, -bound), bound)
+        tangent[k] += change
+        return (vxa - ima * change * ny, vya + ima * change * nx, wa - iia * rt_a[k] * change,
+                vxb + imb * change * ny, vyb - imb * change * nx, wb + iib * rt_b[k] * change)
+
     for _ in range(iterations):
         for g in range(len(first_of)):
             a, b, nx, ny = a_of[g], b_of[g], nx_of[g], ny_of[g]
@@ -152,24 +172,6 @@ def solve_constraints(velocity: np.ndarray, rows: ConstraintRows, iterations: in
             block = use_block and block_of[g]
             # The two bodies' velocities stay in locals while the group is solved.
             vxa, vya, wa, vxb, vyb, wb = vx[a], vy[a], w[a], vx[b], vy[b], w[b]
-
-            def friction(k, vxa, vya, wa, vxb, vyb, wb):
-                """Row k's tangent impulse along t = (ny, -nx), within the Coulomb bound."""
-                mu = mu_of[k]
-                if not use_friction or mu == 0.0:
-                    return vxa, vya, wa, vxb, vyb, wb
-                if accumulate:
-                    (vxa, vya, wa), (vxb, vyb, wb), tangent[k] = apply_friction_impulse(
-                        (vxa, vya, wa), (vxb, vyb, wb), points[k], normal[k], tangent[k])
-                    return vxa, vya, wa, vxb, vyb, wb
-                # Clamped increments: bounded by this sweep's normal increment, not the total.
-                tangent_velocity = (vxb - vxa) * ny - (vyb - vya) * nx + wb * rt_b[k] - wa * rt_a[k]
-                change = -mass_tangent[k] * tangent_velocity
-                bound = mu * normal_change[k]
-                change = min(max(change, -bound), bound)
-                tangent[k] += change
-                return (vxa - ima * change * ny, vya + ima * change * nx, wa - iia * rt_a[k] * change,
-                        vxb + imb * change * ny, vyb - imb * change * nx, wb + iib * rt_b[k] * change)
 
             if friction_first:
                 for k in group:

@@ -37,6 +37,7 @@ Run directly, by an instructor::
 from __future__ import annotations
 
 import json
+import sys
 import time
 import traceback
 from dataclasses import dataclass, field
@@ -71,9 +72,18 @@ def register_hypothesis_profile() -> None:
     """Reproducible, bounded Hypothesis runs: no database, no deadline, no 'explain'
     phase (it re-runs the student's code many times), one bug reported, 30 examples
     per test unless the test asks for another number (each is a round trip to the
-    sandbox, and grading 100 submissions must stay within minutes)."""
-    from hypothesis import HealthCheck, Phase, settings
+    sandbox, and grading 100 submissions must stay within minutes).
 
+    A graded run inside a longer process (the project's own tests grade samples in
+    pytest's process) changes Hypothesis for that process; :func:`restore_hypothesis`
+    undoes it when the run ends.
+    """
+    from hypothesis import HealthCheck, Phase, settings
+    from hypothesis.internal.conjecture import engine, providers
+
+    if not _SAVED_HYPOTHESIS:
+        _SAVED_HYPOTHESIS.update(profile=settings._current_profile, local=providers._get_local_constants,
+                                 shrinks=engine.MAX_SHRINKS, shrink_seconds=engine.MAX_SHRINKING_SECONDS)
     settings.register_profile(HYPOTHESIS_PROFILE, database=None, derandomize=True, deadline=None,
                               max_examples=30, report_multiple_bugs=False, print_blob=False,
                               phases=[Phase.explicit, Phase.generate, Phase.shrink],
@@ -83,18 +93,75 @@ def register_hypothesis_profile() -> None:
     bound_shrinking()
 
 
+#: What :func:`register_hypothesis_profile` changed, kept for :func:`restore_hypothesis`.
+_SAVED_HYPOTHESIS: dict = {}
+
+
+def restore_hypothesis() -> None:
+    """Put back the profile, local constants and shrink limits a graded run replaced."""
+    if not _SAVED_HYPOTHESIS:
+        return
+    from hypothesis import settings
+    from hypothesis.internal.conjecture import engine, providers
+
+    saved = dict(_SAVED_HYPOTHESIS)
+    _SAVED_HYPOTHESIS.clear()
+    settings.load_profile(saved["profile"] or "default")
+    providers._get_local_constants = saved["local"]
+    providers.CONSTANTS_CACHE.cache.clear()
+    engine.MAX_SHRINKS, engine.MAX_SHRINKING_SECONDS = saved["shrinks"], saved["shrink_seconds"]
+
+
+#: Graded test modules imported by a graded run, under the grading profile, by name.
+_GRADED_IMPORTS: dict[str, object] = {}
+
+
+def graded_test_modules() -> dict[str, object]:
+    """The graded test modules (``test_*.py`` under :data:`TESTS_DIR`) now imported."""
+    found = {}
+    for name, module in list(sys.modules.items()):
+        file = getattr(module, "__file__", None)
+        if file and Path(file).name.startswith("test_") and Path(file).resolve().is_relative_to(TESTS_DIR):
+            found[name] = module
+    return found
+
+
+def forget_tests_imported_elsewhere() -> None:
+    """Make pytest import again the graded test modules another import left behind.
+
+    Hypothesis binds a ``@given`` test to the settings in force when its module is
+    imported, and pytest reuses a module already in ``sys.modules``.  The project's own
+    tests import graded test modules for their strategies, under their own profile
+    (100 examples on CI, random ones elsewhere); a graded run in that process would
+    then draw those examples instead of the grading profile's fixed 30.
+    """
+    for name, module in graded_test_modules().items():
+        if _GRADED_IMPORTS.get(name) is not module:
+            del sys.modules[name]
+
+
+def note_graded_imports() -> None:
+    """Remember the graded test modules a graded run imported (they may be reused)."""
+    _GRADED_IMPORTS.update(graded_test_modules())
+
+
 def ignore_local_constants() -> None:
     """Make Hypothesis draw the same examples whatever modules are loaded.
 
     Hypothesis 6 mixes into its examples the literal constants of every local module
     already imported, so a student's public run and the instructor's public + hidden
     run (which also imports the reference) would draw different examples for one test.
-    Graded runs use its global constants only.
+    Graded runs use its global constants only.  Hypothesis caches the constants it may
+    draw per kind of choice for the whole process, so the cache is emptied too: a test
+    that ran earlier in the process (the project's own property tests) would otherwise
+    leave its local constants in every later graded run, whose examples would then
+    depend on which tests ran before it.
     """
     from hypothesis.internal.conjecture import providers
 
     empty = providers.Constants()
     providers._get_local_constants = lambda: empty
+    providers.CONSTANTS_CACHE.cache.clear()
 
 
 def bound_shrinking() -> None:
@@ -363,6 +430,10 @@ def pytest_configure(config):
         run = GradedRun(package_dir=Path(student).expanduser().resolve() if student else None, limits=limits,
                         isolation=config.getoption("--isolation"))
         config.pluginmanager.register(run, "grader-graded-run")
+
+
+def pytest_unconfigure(config):
+    restore_hypothesis()
 
 
 def graded_run(config) -> GradedRun:

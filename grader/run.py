@@ -14,7 +14,7 @@ import os
 from pathlib import Path
 
 from .outcome import Outcome
-from .plugin import GradedRun, TESTS_DIR, TestResult
+from .plugin import GradedRun, TESTS_DIR, TestResult, forget_tests_imported_elsewhere, note_graded_imports
 from .sandbox import Limits
 from .spec import SpecError, TestSpec
 
@@ -33,10 +33,12 @@ def pytest_main(arguments: list[str], plugin: GradedRun) -> tuple[int, str]:
     # seconds of start-up and change nothing here.
     autoload = os.environ.get(AUTOLOAD_VARIABLE)
     os.environ[AUTOLOAD_VARIABLE] = "1"
+    forget_tests_imported_elsewhere()
     with contextlib.redirect_stdout(text), contextlib.redirect_stderr(text):
         try:
             code = pytest.main(base + arguments, plugins=[plugin])
         finally:
+            note_graded_imports()
             plugin.close()
             if autoload is None:
                 os.environ.pop(AUTOLOAD_VARIABLE, None)

@@ -1,0 +1,108 @@
+"""Graded Hypothesis runs draw one fixed sequence of examples, whatever ran before them
+in the process, and leave the process's Hypothesis as they found it.
+
+The project's tests grade the example class inside pytest's own process, after other
+property tests; a graded test's examples must not depend on which those were (a buggy
+sample caught by one example in 300 was once caught on CI only)."""
+from __future__ import annotations
+
+import importlib
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.internal.conjecture import engine, providers
+
+from grader.plugin import HYPOTHESIS_PROFILE, PUBLIC_TESTS, register_hypothesis_profile, restore_hypothesis
+from grader.run import collect
+
+ROOT = Path(__file__).resolve().parents[1]
+
+DRAW_GRADED_EXAMPLES = """
+import json, sys
+sys.path.insert(0, sys.argv[1])
+from tests.test_graded_hypothesis import graded_examples
+print(json.dumps(graded_examples()))
+"""
+
+
+def graded_examples() -> list:
+    """The examples a graded test of the quadtree's coincident boxes draws."""
+    sys.path.insert(0, str(ROOT / "grader" / "tests" / "public"))
+    try:
+        from test_quadtree import coincident_boxes
+    finally:
+        sys.path.remove(str(ROOT / "grader" / "tests" / "public"))
+    seen = []
+    register_hypothesis_profile()
+    try:
+        @given(scene=coincident_boxes())
+        def graded(scene):
+            seen.append(scene)
+
+        graded()
+    finally:
+        restore_hypothesis()
+    return json.loads(json.dumps(seen))
+
+
+def fill_constants_cache() -> None:
+    """A property test of the project's own (default profile, local constants on):
+    it leaves the integers of every imported local module in Hypothesis's cache."""
+    import grader.samples.example_class  # noqa: F401  (local modules full of constants)
+    import solutions.world  # noqa: F401
+
+    @settings(max_examples=400, database=None, derandomize=True, deadline=None)
+    @given(st.integers(0, 90), st.integers(2, 12), st.integers(0, 10), st.integers(0, 32 * 32 - 1))
+    def project_test(a, b, c, d):
+        pass
+
+    project_test()
+
+
+def test_graded_examples_do_not_depend_on_earlier_tests():
+    fill_constants_cache()
+    assert len(providers.CONSTANTS_CACHE.cache) > 0
+    here = graded_examples()
+    fresh = subprocess.run([sys.executable, "-c", DRAW_GRADED_EXAMPLES, str(ROOT)], capture_output=True,
+                           text=True, check=True, cwd=ROOT)
+    assert here == json.loads(fresh.stdout)
+
+
+def test_a_graded_run_puts_hypothesis_back():
+    before = (settings._current_profile, providers._get_local_constants, engine.MAX_SHRINKS,
+              engine.MAX_SHRINKING_SECONDS)
+    register_hypothesis_profile()
+    assert settings._current_profile == HYPOTHESIS_PROFILE
+    assert settings.default.max_examples == 30 and settings.default.derandomize
+    assert len(providers._get_local_constants()) == 0
+    restore_hypothesis()
+    after = (settings._current_profile, providers._get_local_constants, engine.MAX_SHRINKS,
+             engine.MAX_SHRINKING_SECONDS)
+    assert after == before
+
+
+def test_a_graded_run_imports_its_tests_under_the_grading_profile():
+    """A graded test module imported elsewhere first (the project's tests import them
+    for their strategies) is imported again by the graded run, so its @given tests use
+    the grading profile and not the settings of that other import."""
+    name = "grader.tests.public.test_quadtree"
+
+    def examples_of_coincident() -> int:
+        return sys.modules[name].test_coincident._hypothesis_internal_use_settings.max_examples
+
+    settings.register_profile("elsewhere", max_examples=100, derandomize=True)
+    previous = settings._current_profile
+    sys.modules.pop(name, None)
+    settings.load_profile("elsewhere")
+    try:
+        importlib.import_module(name)
+    finally:
+        settings.load_profile(previous)
+    assert examples_of_coincident() == 100
+    collect([PUBLIC_TESTS / "test_quadtree.py"])
+    assert examples_of_coincident() == 30
+    assert settings._current_profile == previous

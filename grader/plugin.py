@@ -49,6 +49,7 @@ import pytest
 from .credit import GradedFailure, partial_points
 from .figures import bounded
 from .outcome import MESSAGE_LIMIT, Outcome, StudentCallFailed, StudentCallStopped, capped
+from .replay import is_hypothesis_test, replaying
 from .sandbox import Limits, Sandbox
 from .spec import EXERCISES, VISIBILITIES, SpecError, TestSpec
 from .student import StudentCode
@@ -272,6 +273,9 @@ class GradedRun:
         if self.collect_only:
             config.hook.pytest_deselected(items=list(items))
             items[:] = []
+        for item in items:
+            if is_hypothesis_test(getattr(item, "obj", None)):
+                item.obj = replaying(item.obj)
 
     @pytest.hookimpl(hookwrapper=True, tryfirst=True)
     def pytest_runtest_protocol(self, item, nextitem):

@@ -1,5 +1,6 @@
 """Graded Hypothesis runs draw one fixed sequence of examples, whatever ran before them
-in the process, and leave the process's Hypothesis as they found it.
+in the process, and leave the process's Hypothesis as they found it; a grading process
+replays the examples of a passing run (grader/replay.py) with the same results.
 
 The project's tests grade the example class inside pytest's own process, after other
 property tests; a graded test's examples must not depend on which those were (a buggy
@@ -12,11 +13,13 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.internal.conjecture import engine, providers
 
 from grader.plugin import HYPOTHESIS_PROFILE, PUBLIC_TESTS, register_hypothesis_profile, restore_hypothesis
+from grader.replay import replaying
 from grader.run import collect
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -106,3 +109,60 @@ def test_a_graded_run_imports_its_tests_under_the_grading_profile():
     collect([PUBLIC_TESTS / "test_quadtree.py"])
     assert examples_of_coincident() == 30
     assert settings._current_profile == previous
+
+
+def graded_toy_test(seen: list, submission: dict | None = None):
+    """A @given test under the grading profile whose body writes down what it is given
+    and fails for the numbers ``submission["wrong_when"]`` picks (a submission's bug)."""
+    submission = {} if submission is None else submission
+    register_hypothesis_profile()
+    try:
+        @given(numbers=st.lists(st.integers(-1000, 1000), max_size=8), cell=st.sampled_from((0.25, 0.5, 1.0)))
+        def toy(student, numbers, cell):
+            seen.append((list(numbers), cell))
+            wrong_when = submission.get("wrong_when", lambda n: False)
+            assert not any(wrong_when(n) for n in numbers), f"wrong for {numbers}"
+    finally:
+        restore_hypothesis()
+    return toy
+
+
+def run_graded(test, **fixtures):
+    register_hypothesis_profile()
+    try:
+        test(**fixtures)
+    finally:
+        restore_hypothesis()
+
+
+def test_a_replay_gives_the_examples_hypothesis_draws():
+    plain, replayed = [], []
+    run_graded(graded_toy_test(plain), student=None)
+    run = replaying(graded_toy_test(replayed))
+    run_graded(run, student=None)                 # records
+    first = list(replayed)
+    replayed.clear()
+    run_graded(run, student=None)                 # replays
+    assert len(plain) == 30 and first == plain and replayed == plain
+
+
+def test_a_failing_replay_fails_as_hypothesis_would():
+    """A bug in numbers above 900: the replay meets it, and the test then fails with
+    Hypothesis's own shrunk example, as it does when nothing was recorded."""
+    def failure(run) -> str:
+        with pytest.raises(AssertionError) as caught:
+            run_graded(run, student=None)
+        return str(caught.value).splitlines()[0]  # "wrong for [the shrunk numbers]"
+
+    def buggy(n):
+        return n > 900
+
+    expected = failure(graded_toy_test([], {"wrong_when": buggy}))
+    seen, submission = [], {}
+    run = replaying(graded_toy_test(seen, submission))
+    run_graded(run, student=None)                 # an honest submission records
+    assert any(buggy(n) for numbers, _ in seen for n in numbers)
+    submission["wrong_when"] = buggy
+    seen.clear()
+    assert failure(run) == expected
+    assert len(seen) > 30                         # the replayed examples, then Hypothesis's

@@ -328,6 +328,7 @@ class Sandbox:
         self._worker_pid: int | None = None
         self._buffer = bytearray()
         self.restarts = 0
+        self._settled: tuple[int, frozenset] | None = None  # see _reap_strays
 
     # Life cycle -----------------------------------------------------------------
     def __enter__(self) -> "Sandbox":
@@ -693,6 +694,8 @@ class Sandbox:
         # The memory cage lists every process of this sandbox (none can leave it): far
         # cheaper than reading the whole process table after every call.
         caged = self._cage.pids() if self._cage is not None and worker_pid is not None else None
+        if caged is not None and self._settled == (worker_pid, frozenset(caged)):
+            return  # the very processes found after the last call: the worker and its ancestors
         table = [(pid, fields) for pid, fields in process_table(caged)
                  if int(fields.get("Uid", "-1").split()[0]) == self.uid]
         spared: set[int] = set()
@@ -713,6 +716,9 @@ class Sandbox:
                 killed.append(str(pid))
             except OSError:
                 pass
+        # Nothing to kill: the next call may skip reading /proc if the cage still holds
+        # exactly these processes (a new one, a stray, has a pid not in the set).
+        self._settled = (worker_pid, frozenset(caged)) if caged is not None and not killed else None
         deadline = time.monotonic() + 1.0
         while killed and time.monotonic() < deadline:  # SIGKILL lands asynchronously
             killed = [pid for pid in killed if _running(pid)]

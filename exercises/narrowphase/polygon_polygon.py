@@ -256,13 +256,15 @@ def clip_segment_to_half_plane(points: list, plane_normal: np.ndarray, plane_off
 
 def reference_face_manifold(ref_vertices: np.ndarray, ref_normal: np.ndarray, ref_face: int,
                             inc_vertices: np.ndarray, inc_normals: np.ndarray, inc_faces: np.ndarray,
-                            ref_name: str, scale: float) -> tuple[list, list, list]:
+                            ref_name: str, scale: float, margin: float = 0.0) -> tuple[list, list, list]:
     """Contact points of the incident face clipped against reference face ``ref_face``.
 
     Steps 3 and 4 of the module docstring: pick the incident face, clip it by the two
     side planes of the reference face, keep the points on or below the reference face
-    (up to :data:`KEEP_POINT_TOL` times ``scale``, m) and move each one halfway to the
-    reference face.
+    (up to :data:`KEEP_POINT_TOL` times ``scale``, m) or at most ``margin`` above it,
+    and move each one halfway to the reference face.  ``margin`` is 0 for a contact;
+    the soft step's speculative contacts (:mod:`.speculative`) keep points that are
+    still apart but nearly touching, as Box2D v3 does, with a negative depth.
 
     Parameters
     ----------
@@ -279,13 +281,16 @@ def reference_face_manifold(ref_vertices: np.ndarray, ref_normal: np.ndarray, re
     scale : float
         The pair's tolerance scale (m, :func:`tolerance_scale`): points up to
         ``KEEP_POINT_TOL * scale`` beyond a side plane or above the face are on it.
+    margin : float, optional
+        Largest distance (m, >= 0) above the reference face of a point that is kept.
 
     Returns
     -------
     points : list of numpy.ndarray
         0, 1 or 2 contact points (m).
     depths : list of float
-        Depth of each point below the reference face (m, may be -0 when touching).
+        Depth of each point below the reference face (m, may be -0 when touching;
+        down to ``-margin`` for a point above it).
     feature_ids : list of tuple
         One id per point, ``(ref_name, ref_face, incident_face, k)``, see
         :func:`collide_polygon_polygon`.
@@ -298,6 +303,17 @@ def reference_face_manifold(ref_vertices: np.ndarray, ref_normal: np.ndarray, re
     ...                                               crate_normals, crate_faces, "A", 5.0)
     >>> [p.round(12).tolist() for p in points], [round(d, 12) for d in depths], ids
     ([[-0.5, -0.05], [0.5, -0.05]], [0.1, 0.1], [('A', 2, 0, 0), ('A', 2, 0, 1)])
+
+    The crate lifted to hover 1 cm above the floor: no point, unless the margin
+    reaches it.
+
+    >>> hovering = crate_vertices + [0.0, 0.11]
+    >>> reference_face_manifold(floor, np.array([0.0, 1.0]), 2, hovering, crate_normals, crate_faces, "A", 5.0)
+    ([], [], [])
+    >>> points, depths, ids = reference_face_manifold(floor, np.array([0.0, 1.0]), 2, hovering, crate_normals,
+    ...                                               crate_faces, "A", 5.0, margin=0.02)
+    >>> [p.round(12).tolist() for p in points], [round(d, 12) for d in depths]
+    ([[-0.5, 0.005], [0.5, 0.005]], [-0.01, -0.01])
     """
     raise NotImplementedError("write reference_face_manifold(), then run `grader check contacts`")
 

@@ -12,13 +12,16 @@ above the reference face, with its signed ``separation`` (m, > 0 apart, <= 0
 overlapping); the solver lets a point with separation ``s > 0`` close at ``s / h``
 and no faster, so a speculative point never pulls.
 
-The reference and incident faces and the clipping follow
+The reference and incident faces follow
 :func:`~solutions.narrowphase.polygon_polygon.collide_polygon_polygon` (the same
-helpers and tolerances), with two differences: the last test keeps points up to
-``margin`` instead of 0, and A keeps the reference role unless B's face is clearly
-better, without ``collide_polygon_polygon``'s second look when A's manifold misses
-B's deepest vertex (a deep-overlap case, about 2 % of random overlapping pairs;
-moving B by ``depth * normal`` still separates them).  Circles are not handled here: the soft step uses the exact contact for them.
+helpers and tolerances) and the clipping is its own,
+:func:`~solutions.narrowphase.polygon_polygon.reference_face_manifold`, with points
+kept up to ``margin`` above the reference face instead of 0.  One difference: A
+keeps the reference role unless B's face is clearly better, without
+``collide_polygon_polygon``'s second look when A's manifold misses B's deepest vertex
+(a deep-overlap case, about 2 % of random overlapping pairs; moving B by
+``depth * normal`` still separates them).  Circles are not handled here: the soft
+step uses the exact contact for them.
 Normal from A to B, SI units.
 """
 from __future__ import annotations
@@ -27,9 +30,8 @@ import numpy as np
 
 from ..contact import Contact
 from ..shapes import AABB, OBB, ConvexPolygon
-from .polygon_polygon import (KEEP_POINT_TOL, REFERENCE_FACE_ABSOLUTE_TOL, REFERENCE_FACE_RELATIVE_TOL,
-                              clip_segment_to_half_plane, incident_face, max_face_separation, polygon_faces,
-                              tolerance_scale)
+from .polygon_polygon import (REFERENCE_FACE_ABSOLUTE_TOL, REFERENCE_FACE_RELATIVE_TOL, max_face_separation,
+                              polygon_faces, reference_face_manifold, tolerance_scale)
 
 #: Box2D's speculative distance, 4 times its linear slop of 5 mm (m).
 SPECULATIVE_MARGIN = 0.02
@@ -83,27 +85,10 @@ def speculative_polygon_manifold(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | 
     else:
         ref_name, face, (ref_vertices, ref_normals, ref_faces), incident = "A", face_a, polygon_a, polygon_b
     n = ref_normals[int(np.flatnonzero(ref_faces == face)[0])]
-    tangent = np.array([-n[1], n[0]])
-    v1, v2 = ref_vertices[face], ref_vertices[(face + 1) % len(ref_vertices)]
-    inc_vertices, inc_normals, inc_faces = incident
-    j = incident_face(inc_normals, inc_faces, n)
-    j2 = (j + 1) % len(inc_vertices)
-    segment = [(inc_vertices[j], (ref_name, face, j, j)), (inc_vertices[j2], (ref_name, face, j, j2))]
-    roundoff = KEEP_POINT_TOL * scale
-    segment = clip_segment_to_half_plane(segment, tangent, float(tangent @ v2), roundoff)
-    segment = clip_segment_to_half_plane(segment, -tangent, float(-tangent @ v1), roundoff)
-    points, separations, ids = [], [], []
-    for point, feature in segment:
-        separation = float(n @ (point - v1))
-        midpoint = point - 0.5 * separation * n
-        if separation <= margin + roundoff and not any(float(np.max(np.abs(midpoint - q))) <= roundoff
-                                                       for q in points):
-            points.append(midpoint)
-            separations.append(separation)
-            ids.append(feature)
+    points, depths, ids = reference_face_manifold(ref_vertices, n, face, *incident, ref_name, scale, margin)
     if not points:
         return None
-    separations = np.array(separations)
+    separations = -np.array(depths)              # exact: the separations the clipping found
     normal = n if ref_name == "A" else 0.0 - n
     depths = np.maximum(-separations, 0.0)
     return Contact(normal, float(depths.max()), np.array(points), depths, tuple(ids)), separations

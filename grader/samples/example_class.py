@@ -963,7 +963,7 @@ ONE_POINT_MANIFOLD = BuggySample(
     replacements=(Replacement("narrowphase.polygon_polygon", "reference_face_manifold", '''
         def reference_face_manifold(ref_vertices: np.ndarray, ref_normal: np.ndarray, ref_face: int,
                                     inc_vertices: np.ndarray, inc_normals: np.ndarray, inc_faces: np.ndarray,
-                                    ref_name: str, scale: float) -> tuple[list, list, list]:
+                                    ref_name: str, scale: float, margin: float = 0.0) -> tuple[list, list, list]:
             n = ref_normal
             tangent = np.array([-n[1], n[0]])
             v1, v2 = ref_vertices[ref_face], ref_vertices[(ref_face + 1) % len(ref_vertices)]
@@ -977,7 +977,7 @@ ONE_POINT_MANIFOLD = BuggySample(
             best = None
             for point, feature in segment:
                 separation = float(n @ (point - v1))
-                if separation <= roundoff and (best is None or separation < best[0]):
+                if separation <= margin + roundoff and (best is None or separation < best[0]):
                     best = (separation, point, feature)
             if best is None:
                 return [], [], []

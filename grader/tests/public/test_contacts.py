@@ -452,6 +452,21 @@ MANIFOLD_CASES = [
      [((1e6 - 0.5, 2e-7), -4e-7, ("A", 2, 0, 0)), ((1e6 + 0.5, 2e-7), -4e-7, ("A", 2, 0, 1))]),
     (FLOOR, (0, 1), 2, [(-0.5, 4e-7), (0.5, 4e-7), (0.5, 1), (-0.5, 1)], "A", 1.0, []),
 ]
+#: With a margin (the last entry, m): points up to that far above the reference face are
+#: kept, each with a negative depth (the soft step's speculative contacts).
+MARGIN_CASES = [
+    # A crate hovering 1 cm above the floor: both corners within a 2 cm margin ...
+    (FLOOR, (0, 1), 2, [(-0.5, 0.01), (0.5, 0.01), (0.5, 1), (-0.5, 1)], "A", 1.0,
+     [((-0.5, 0.005), -0.01, ("A", 2, 0, 0)), ((0.5, 0.005), -0.01, ("A", 2, 0, 1))], 0.02),
+    # ... and none within 5 mm.
+    (FLOOR, (0, 1), 2, [(-0.5, 0.01), (0.5, 0.01), (0.5, 1), (-0.5, 1)], "A", 1.0, [], 0.005),
+    # A tilted face: one corner 0.2 m deep, the other 1 cm above; both kept.
+    (FLOOR, (0, 1), 2, [(-0.5, -0.2), (0.5, 0.01), (0.5, 1.2), (-0.5, 1.2)], "A", 1.2,
+     [((-0.5, -0.1), 0.2, ("A", 2, 0, 0)), ((0.5, 0.005), -0.01, ("A", 2, 0, 1))], 0.02),
+    # Exactly the margin above, scale 0 (no roundoff allowance): kept.
+    (FLOOR, (0, 1), 2, [(-0.5, 0.02), (0.5, 0.02), (0.5, 1), (-0.5, 1)], "A", 0.0,
+     [((-0.5, 0.01), -0.02, ("A", 2, 0, 0)), ((0.5, 0.01), -0.02, ("A", 2, 0, 1))], 0.02),
+]
 
 
 def manifold_problem(got, want: list) -> str | None:
@@ -482,16 +497,19 @@ def manifold_problem(got, want: list) -> str | None:
 
 @pytest.mark.points(1)
 def test_reference_face_manifold(student):
-    """Clipping the incident face against a reference face"""
+    """Clipping the incident face against a reference face (with and without a margin)"""
+    cases = MANIFOLD_CASES + MARGIN_CASES
     calls = []
-    for ref, normal, face, incident, name, scale, _ in MANIFOLD_CASES:
-        calls.append((np.asarray(ref, dtype=float), np.array(normal, dtype=float), face, *box_faces(incident), name, scale))
+    for ref, normal, face, incident, name, scale, _, *margin in cases:
+        calls.append((np.asarray(ref, dtype=float), np.array(normal, dtype=float), face, *box_faces(incident), name, scale,
+                      *margin))
     answers = student.call_many(POLYGONS, "reference_face_manifold", calls)
-    check_cases(zip(MANIFOLD_CASES, answers), lambda case: manifold_problem(case[1], case[0][6]), "reference faces",
+    check_cases(zip(cases, answers), lambda case: manifold_problem(case[1], case[0][6]), "reference faces",
                 describe=lambda case: (f"reference_face_manifold(ref_vertices={show([list(v) for v in case[0][0]])}, "
                                        f"ref_normal={show(list(case[0][1]))}, ref_face={case[0][2]}, "
                                        f"inc_vertices={show([list(v) for v in case[0][3]])}, (its normals and faces), "
-                                       f"ref_name={case[0][4]!r}, scale={show(case[0][5])})"))
+                                       f"ref_name={case[0][4]!r}, scale={show(case[0][5])}"
+                                       + "".join(f", margin={show(m)}" for m in case[0][7:]) + ")"))
 
 
 # Feature ids, worked out by hand ------------------------------------------------------------------

@@ -497,7 +497,7 @@ def manifold_problem(got, want: list) -> str | None:
 
 @pytest.mark.points(1)
 def test_reference_face_manifold(student):
-    """Clipping the incident face against a reference face (with and without a margin)"""
+    """Clipping the incident face against a reference face"""
     cases = MANIFOLD_CASES + MARGIN_CASES
     calls = []
     for ref, normal, face, incident, name, scale, _, *margin in cases:

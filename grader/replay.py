@@ -71,7 +71,3 @@ def replaying(test: Callable) -> Callable:
         return result
 
     return run
-
-
-def forget_recorded_examples() -> None:
-    _RECORDED.clear()

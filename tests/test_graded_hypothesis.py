@@ -8,7 +8,6 @@ sample caught by one example in 300 was once caught on CI only)."""
 from __future__ import annotations
 
 import importlib
-import json
 import subprocess
 import sys
 from pathlib import Path
@@ -25,42 +24,42 @@ from grader.run import collect
 ROOT = Path(__file__).resolve().parents[1]
 
 DRAW_GRADED_EXAMPLES = """
-import json, sys
+import sys
 sys.path.insert(0, sys.argv[1])
 from tests.test_graded_hypothesis import graded_examples
-print(json.dumps(graded_examples()))
+print(graded_examples())
 """
 
 
-def graded_examples() -> list:
-    """The examples a graded test of the quadtree's coincident boxes draws."""
-    sys.path.insert(0, str(ROOT / "grader" / "tests" / "public"))
-    try:
-        from test_quadtree import coincident_boxes
-    finally:
-        sys.path.remove(str(ROOT / "grader" / "tests" / "public"))
+def graded_examples() -> str:
+    """The examples (their repr) a graded test of resolve_collision draws: bodies,
+    contacts and materials, floats among them."""
+    from grader.tests.public.test_impulse import resolve_inputs
+
     seen = []
     register_hypothesis_profile()
     try:
-        @given(scene=coincident_boxes())
-        def graded(scene):
-            seen.append(scene)
+        @given(case=resolve_inputs())
+        def graded(case):
+            seen.append(case)
 
         graded()
     finally:
         restore_hypothesis()
-    return json.loads(json.dumps(seen))
+    return repr(seen)
 
 
 def fill_constants_cache() -> None:
-    """A property test of the project's own (default profile, local constants on):
-    it leaves the integers of every imported local module in Hypothesis's cache."""
+    """A property test of the project's own on the same strategy (its own profile,
+    local constants on, as tests/test_graded_strategies.py does): it leaves the float
+    constants of every imported local module in Hypothesis's cache."""
     import grader.samples.example_class  # noqa: F401  (local modules full of constants)
     import solutions.world  # noqa: F401
+    from grader.tests.public.test_impulse import resolve_inputs
 
-    @settings(max_examples=400, database=None, derandomize=True, deadline=None)
-    @given(st.integers(0, 90), st.integers(2, 12), st.integers(0, 10), st.integers(0, 32 * 32 - 1))
-    def project_test(a, b, c, d):
+    @settings(max_examples=200, database=None, derandomize=True, deadline=None)
+    @given(case=resolve_inputs())
+    def project_test(case):
         pass
 
     project_test()
@@ -72,7 +71,7 @@ def test_graded_examples_do_not_depend_on_earlier_tests():
     here = graded_examples()
     fresh = subprocess.run([sys.executable, "-c", DRAW_GRADED_EXAMPLES, str(ROOT)], capture_output=True,
                            text=True, check=True, cwd=ROOT)
-    assert here == json.loads(fresh.stdout)
+    assert here == fresh.stdout.strip()
 
 
 def test_a_graded_run_puts_hypothesis_back():

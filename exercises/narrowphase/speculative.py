@@ -88,7 +88,7 @@ def speculative_polygon_manifold(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | 
     points, depths, ids = reference_face_manifold(ref_vertices, n, face, *incident, ref_name, scale, margin)
     if not points:
         return None
-    separations = -np.array(depths)              # exact: the separations the clipping found
+    signed = np.array(depths)                    # < 0 for points still apart
     normal = n if ref_name == "A" else 0.0 - n
-    depths = np.maximum(-separations, 0.0)
-    return Contact(normal, float(depths.max()), np.array(points), depths, tuple(ids)), separations
+    depths = np.maximum(signed, 0.0)
+    return Contact(normal, float(depths.max()), np.array(points), depths, tuple(ids)), -signed

@@ -15,10 +15,10 @@ centre of mass (the body's ``position``).  Units: kg, kg m^2, m, rad, m/s, rad/s
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
+from .body_state import BodyState
 from .shapes import AABB, OBB, Circle, ConvexPolygon, Shape, as_length, polygon_centroid
 from .vector import rotation_matrix
 
@@ -44,43 +44,96 @@ def moment_of_inertia(shape_local: Shape, mass: float) -> float:
     return mass * float(np.sum(cr * terms)) / (6.0 * area2)
 
 
-@dataclass(eq=False)
 class Body:
-    """A rigid body; see the module docstring for units and conventions."""
+    """A rigid body; see the module docstring for units and conventions.
 
-    shape: Shape
-    mass: float = 1.0
-    position: np.ndarray = field(default_factory=lambda: np.zeros(2))
-    angle: float = 0.0
-    velocity: np.ndarray = field(default_factory=lambda: np.zeros(2))
-    angular_velocity: float = 0.0
-    restitution: float = 0.0
-    friction: float = 0.0
-    is_static: bool = False
-    fixed_rotation: bool = False
-    is_bullet: bool = False
-    name: str = ""
-    inertia: float = field(init=False)
+    Its pose and velocities live in one row (its slot) of a
+    :class:`~solutions.body_state.BodyState`: its own until a
+    :class:`~solutions.world.World` gathers it into the world's state.  Reading
+    ``position`` or ``velocity`` gives a copy of the row (what the body was doing
+    then); assigning them, ``body.velocity = v`` or ``body.velocity += dv``, writes the
+    row.  Changing one item of the copy (``body.velocity[0] = 0``) changes only the copy.
+    """
 
-    def __post_init__(self):
-        self.position = np.array(self.position, dtype=float).reshape(2)
-        self.velocity = np.array(self.velocity, dtype=float).reshape(2)
-        for label, vec in (("position", self.position), ("velocity", self.velocity)):
+    def __init__(self, shape: Shape, mass: float = 1.0, position=(0.0, 0.0), angle: float = 0.0,
+                 velocity=(0.0, 0.0), angular_velocity: float = 0.0, restitution: float = 0.0,
+                 friction: float = 0.0, is_static: bool = False, fixed_rotation: bool = False,
+                 is_bullet: bool = False, name: str = ""):
+        self.shape = shape
+        self.mass = mass
+        self.is_static = is_static
+        self.fixed_rotation = fixed_rotation
+        self.is_bullet = is_bullet
+        self.name = name
+        position = np.array(position, dtype=float).reshape(2)
+        velocity = np.array(velocity, dtype=float).reshape(2)
+        for label, vec in (("position", position), ("velocity", velocity)):
             if not np.all(np.isfinite(vec)):
                 raise ValueError(f"body {label} must be finite, got {vec.tolist()}")
-        self.angle = float(self.angle)
-        self.angular_velocity = float(self.angular_velocity)
-        if not (math.isfinite(self.angle) and math.isfinite(self.angular_velocity)):
+        angle, angular_velocity = float(angle), float(angular_velocity)
+        if not (math.isfinite(angle) and math.isfinite(angular_velocity)):
             raise ValueError("body angle and angular_velocity must be finite")
         if not self.is_static:
             self.mass = as_length("body mass", self.mass)
             if self.mass == 0:
                 raise ValueError("a dynamic body needs a mass > 0 (use is_static=True for an immovable one)")
-        self.restitution = as_length("restitution", self.restitution)
-        self.friction = as_length("friction", self.friction)
+        self.restitution = as_length("restitution", restitution)
+        self.friction = as_length("friction", friction)
         if isinstance(self.shape, AABB):
             self.fixed_rotation = True
         self.inertia = math.inf if (self.is_static or self.fixed_rotation) else moment_of_inertia(self.shape, self.mass)
+        self.bind(BodyState(1), 0)
+        self.position, self.angle, self.velocity, self.angular_velocity = position, angle, velocity, angular_velocity
+        self._state.dynamic[0], self._state.turning[0] = not self.is_static, self.inverse_inertia > 0.0
+
+    def bind(self, state: BodyState, slot: int) -> None:
+        """Make row ``slot`` of ``state`` this body's pose and velocity (the row must
+        already hold them: :meth:`BodyState.gather` fills it first)."""
+        self._state, self._slot = state, slot
+
+    # Pose and velocities: the body's row of its state, given out as copies.
+    @property
+    def position(self) -> np.ndarray:
+        """Centre of mass (m), shape (2,)."""
+        return self._state.position[self._slot].copy()
+
+    @position.setter
+    def position(self, value) -> None:
+        self._state.position[self._slot] = value
+
+    @property
+    def angle(self) -> float:
+        """Rotation (rad, counter-clockwise)."""
+        return float(self._state.angle[self._slot])
+
+    @angle.setter
+    def angle(self, value: float) -> None:
+        self._state.angle[self._slot] = value
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """Velocity of the centre of mass (m/s), shape (2,)."""
+        return self._state.velocity[self._slot, :2].copy()
+
+    @velocity.setter
+    def velocity(self, value) -> None:
+        self._state.velocity[self._slot, :2] = value
+
+    @property
+    def angular_velocity(self) -> float:
+        """Angular velocity (rad/s, counter-clockwise)."""
+        return float(self._state.velocity[self._slot, 2])
+
+    @angular_velocity.setter
+    def angular_velocity(self, value: float) -> None:
+        self._state.velocity[self._slot, 2] = value
+
+    def __repr__(self) -> str:
+        return (f"Body(shape={self.shape!r}, mass={self.mass!r}, position={self.position.tolist()}, "
+                f"angle={self.angle!r}, velocity={self.velocity.tolist()}, "
+                f"angular_velocity={self.angular_velocity!r}, restitution={self.restitution!r}, "
+                f"friction={self.friction!r}, is_static={self.is_static!r}, "
+                f"fixed_rotation={self.fixed_rotation!r}, is_bullet={self.is_bullet!r}, name={self.name!r})")
 
     # Constructors for shapes centred on the centre of mass.
     @classmethod

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .body import Body
+from .body_state import BodyState
 from .broadphase.aabb_array import aabb_array
 from .broadphase.brute_force import pairs_brute_force
 from .broadphase.quadtree import pairs_quadtree
@@ -42,7 +43,7 @@ from .narrowphase.dispatch import collide
 from .narrowphase.speculative import SPECULATIVE_MARGIN, speculative_polygon_manifold
 from .narrowphase.speculative_batch import box_pose, manifolds_as_contacts, speculative_box_manifolds
 from .response.contact_solver import BACKENDS, ContactSolver, SolverSettings
-from .response.soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, BodyStates, SoftStepSolver, soft_coefficients
+from .response.soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, SoftStepSolver, soft_coefficients
 from .shapes import AABB, OBB, Circle, Shape, bounding_aabb
 
 #: The soft step computes box-box manifolds with numpy from this many pairs on (below
@@ -163,6 +164,9 @@ class World:
     def __init__(self, bodies: list[Body], settings: WorldSettings | None = None,
                  joints: list[DistanceJoint] | None = None):
         self.bodies = list(bodies)
+        # The one body state: every stage reads and writes these arrays, and each body
+        # is a handle on its row (a body in two worlds belongs to the last one).
+        self.state = BodyState.gather(self.bodies)
         self.settings = settings or WorldSettings()
         self.joints = list(joints or [])
         for joint in self.joints:
@@ -206,45 +210,36 @@ class World:
         pairs = self.broad_phase(shapes, margin=SPECULATIVE_MARGIN)
         self.manifolds, separations = self.speculative_narrow_phase(shapes, pairs)   # once per step
         self.solver.begin_step(self.bodies, self.manifolds, h, separations)
-        states = BodyStates(self.bodies)
+        state = self.state
+        # Continuous detection once per step, as Box2D v3 does (at the end, from here).
+        starts = {k: state.position[k].copy() for k, b in enumerate(self.bodies)
+                  if b.is_bullet and not b.is_static} if self.settings.continuous else {}
         gravity = np.asarray(self.settings.gravity, dtype=float)
         joint_softness = soft_coefficients(min(JOINT_HERTZ, 0.25 / h), JOINT_DAMPING_RATIO, h)
         for _ in range(self.settings.substeps):
-            states.integrate_velocities(gravity, h)
-            self.solver.solve_substep(states, h, use_bias=True)
-            if self.joints:   # the joint solver works on the bodies themselves
-                states.write(self.bodies)
+            state.integrate_velocities(gravity, h)
+            self.solver.solve_substep(state, h, use_bias=True)
+            if self.joints:   # the joint solver works on the bodies, which are rows of the state
                 self.joint_solver.solve(self.bodies, self.joints, h, softness=joint_softness)
-                self.integrate_positions({}, h)
-                if self.settings.solver.relax:
-                    self.joint_solver.solve(self.bodies, self.joints, h, use_bias=False)
-                states.read(self.bodies)
-            else:
-                states.integrate_positions(h)
-            self.solver.solve_substep(states, h, use_bias=False)
+            state.integrate_positions(h)
+            if self.joints and self.settings.solver.relax:
+                self.joint_solver.solve(self.bodies, self.joints, h, use_bias=False)
+            self.solver.solve_substep(state, h, use_bias=False)
             self.time += h
-        self.solver.end_step(states, h)
-        # Continuous detection once per step, as Box2D v3 does: a bullet whose path over
-        # the whole step crossed a static body goes back to where it first touched it;
-        # the next step's contacts turn it round.
-        starts = {k: self.bodies[k].position.copy() for k, b in enumerate(self.bodies)
-                  if b.is_bullet and not b.is_static} if self.settings.continuous else {}
-        states.write(self.bodies)
+        self.solver.end_step(state, h)
+        # A bullet whose path over the whole step crossed a static body goes back to
+        # where it first touched it; the next step's contacts turn it round.
         for index, start in starts.items():
-            body = self.bodies[index]
-            move = body.position - start
+            move = state.position[index] - start
             first = self.time_of_first_hit(shapes[index], move)
             if first < 1.0:
-                body.position = start + first * move
+                state.position[index] = start + first * move
                 self.stats.bullets_stopped += 1
 
     # The stages -----------------------------------------------------------------
     def apply_gravity(self, h: float) -> None:
         """v += h g for every dynamic body."""
-        g = np.asarray(self.settings.gravity, dtype=float)
-        for body in self.bodies:
-            if not body.is_static:
-                body.velocity = body.velocity + h * g
+        self.state.integrate_velocities(np.asarray(self.settings.gravity, dtype=float), h)
 
     def world_shapes(self) -> list[Shape]:
         """Every body's shape in world coordinates (static ones computed once)."""
@@ -373,9 +368,7 @@ class World:
 
     def integrate_positions(self, displacements: dict[int, np.ndarray], h: float) -> None:
         """x += h v (or a bullet's cut-short displacement), angle += h w."""
-        for index, body in enumerate(self.bodies):
-            if body.is_static:
-                continue
-            body.position = body.position + displacements.get(index, h * body.velocity)
-            if not body.fixed_rotation:
-                body.angle += h * body.angular_velocity
+        starts = {index: self.state.position[index].copy() for index in displacements}
+        self.state.integrate_positions(h)
+        for index, move in displacements.items():
+            self.state.position[index] = starts[index] + move

@@ -55,3 +55,30 @@ def test_point_velocity_and_energy():
 def test_bad_bodies_raise(kwargs, message):
     with pytest.raises(ValueError, match=message):
         Body.circle(1.0, **kwargs)
+
+
+def test_a_body_is_a_row_of_its_worlds_state():
+    from solutions.world import World
+
+    ground = Body.box(10, 1, is_static=True, position=(0, -0.5))
+    box = Body.box(1, 1, mass=1.0, position=(0, 2), angular_velocity=0.5)
+    before = box.position
+    world = World([ground, box])
+    assert world.state.position.tolist() == [[0.0, -0.5], [0.0, 2.0]]
+    world.step(1 / 60)
+    # The body reads the world's arrays; a position read earlier is a copy of that moment.
+    assert box.position.tolist() == world.state.position[1].tolist() and before.tolist() == [0.0, 2.0]
+    assert box.angle == world.state.angle[1] != 0.0
+    # Writing through the body writes the world's row, with += too.
+    box.velocity += (1.0, 0.0)
+    box.position = (3.0, 4.0)
+    assert world.state.velocity[1, 0] == 1.0 and world.state.position[1].tolist() == [3.0, 4.0]
+
+
+def test_a_body_that_cannot_turn_has_no_angular_velocity_in_a_world():
+    from solutions.world import World
+
+    slider = Body.box(1, 1, mass=1.0, fixed_rotation=True, angular_velocity=3.0)
+    world = World([slider])
+    world.step(1 / 60)
+    assert slider.angular_velocity == 0.0 and slider.angle == 0.0

@@ -18,7 +18,8 @@ from solutions.body import Body
 from solutions.contact import Contact
 from solutions.narrowphase.speculative import speculative_polygon_manifold
 from solutions.response.contact_solver import SolverSettings
-from solutions.response.soft_step import BodyStates, SoftStepSolver, soft_coefficients
+from solutions.body_state import BodyState
+from solutions.response.soft_step import SoftStepSolver, soft_coefficients
 from solutions.solver import kernel_numba
 from solutions.solver.constraint_rows import ConstraintRows
 from solutions.solver.kernel import solve_constraints
@@ -202,7 +203,7 @@ def test_separations_follow_the_moved_bodies(shift, turn):
     solver.begin_step([floor, box], [(0, 1, contact)], DT, [separations])
     box.position = box.position + shift
     box.angle += turn
-    got = solver.separations(BodyStates([floor, box]))
+    got = solver.separations(BodyState.gather([floor, box]))
     _, want = speculative_polygon_manifold(floor.world_shape(), box.world_shape())
     # Exact for a translation; a turn moves the corners along a circle, which the
     # linearised normal distance follows to second order in the angle.

@@ -58,6 +58,7 @@ import math
 import numpy as np
 
 from ..body import Body
+from ..body_state import BodyState
 from ..contact import Contact
 from ..solver.kernel import kernel
 from .contact_preparation import ContactPreparation
@@ -104,62 +105,19 @@ def soft_coefficients(hertz: float, damping_ratio: float, h: float) -> tuple[flo
     return omega / a1, a2 * a3, a3
 
 
-class BodyStates:
-    """Poses and velocities of all bodies as arrays, for the sub-steps of one step.
-
-    ``position`` (N, 2) m, ``angle`` (N,) rad, ``velocity`` (N, 3) rows ``(vx, vy, w)``
-    in m/s and rad/s; ``dynamic`` and ``turning`` (N,) say which bodies move and which
-    turn (finite inertia).  :meth:`write` copies them back into the bodies.
-    """
-
-    def __init__(self, bodies: list[Body]):
-        self.dynamic = np.array([not body.is_static for body in bodies], dtype=bool)
-        self.turning = np.array([body.inverse_inertia > 0.0 for body in bodies], dtype=bool)
-        self.read(bodies)
-
-    def read(self, bodies: list[Body]) -> None:
-        """Take the poses and velocities from the bodies."""
-        self.position = np.array([body.position.tolist() for body in bodies], dtype=float).reshape(-1, 2)
-        self.angle = np.array([float(body.angle) for body in bodies])
-        self.velocity = np.array([(*body.velocity.tolist(), float(body.angular_velocity)) for body in bodies],
-                                 dtype=float).reshape(-1, 3)
-        self.velocity[~self.turning, 2] = 0.0
-
-    def write(self, bodies: list[Body]) -> None:
-        """Put the poses and velocities of the dynamic bodies back into them."""
-        for k in np.flatnonzero(self.dynamic).tolist():
-            body = bodies[k]
-            body.position = self.position[k].copy()
-            body.velocity = self.velocity[k, :2].copy()
-            if self.turning[k]:
-                body.angle = float(self.angle[k])
-                body.angular_velocity = float(self.velocity[k, 2])
-
-    def integrate_velocities(self, gravity: np.ndarray, h: float) -> None:
-        """v += h g for the dynamic bodies."""
-        self.velocity[self.dynamic, :2] += h * gravity
-
-    def integrate_positions(self, h: float) -> None:
-        """x += h v, angle += h w (static bodies have v = 0)."""
-        self.position += h * self.velocity[:, :2]
-        self.angle += h * self.velocity[:, 2]
-
-
 class SoftStepSolver(ContactPreparation):
     """Contact solver of the soft step; :class:`~solutions.world.World` drives it.
 
     Calling contract, per step of ``dt`` with ``n`` sub-steps of ``h``, on the
-    :class:`BodyStates` of the world's bodies::
+    :class:`~solutions.body_state.BodyState` that the bodies are rows of::
 
         solver.begin_step(bodies, manifolds, h, separations)
-        states = BodyStates(bodies)
         for _ in range(n):
-            states.integrate_velocities(gravity, h)
-            solver.solve_substep(states, h, use_bias=True)    # warm start + soft solve
-            states.integrate_positions(h)
-            solver.solve_substep(states, h, use_bias=False)   # relax (if settings.relax)
-        solver.end_step(states, h)                             # restitution, memory, stats
-        states.write(bodies)
+            state.integrate_velocities(gravity, h)
+            solver.solve_substep(state, h, use_bias=True)     # warm start + soft solve
+            state.integrate_positions(h)
+            solver.solve_substep(state, h, use_bias=False)    # relax (if settings.relax)
+        solver.end_step(state, h)                              # restitution, memory, stats
 
     Every pass is the solver kernel (:func:`~solutions.solver.kernel.solve_constraints`)
     with soft or rigid rows, in Box2D v3's order (normal, then friction).
@@ -173,15 +131,14 @@ class SoftStepSolver(ContactPreparation):
     >>> box = Body.box(1.0, 1.0, position=(0.0, 0.49))
     >>> sunk = Contact((0.0, 1.0), 0.01, [(-0.5, -0.005), (0.5, -0.005)], feature_ids=(0, 1))
     >>> solver, h, gravity = SoftStepSolver(), 1 / 240, np.array([0.0, -9.81])
+    >>> state = BodyState.gather([ground, box])
     >>> solver.begin_step([ground, box], [(0, 1, sunk)], h)
-    >>> states = BodyStates([ground, box])
     >>> for _ in range(4):
-    ...     states.integrate_velocities(gravity, h)
-    ...     solver.solve_substep(states, h, use_bias=True)
-    ...     states.integrate_positions(h)
-    ...     solver.solve_substep(states, h, use_bias=False)
-    >>> solver.end_step(states, h)
-    >>> states.write([ground, box])
+    ...     state.integrate_velocities(gravity, h)
+    ...     solver.solve_substep(state, h, use_bias=True)
+    ...     state.integrate_positions(h)
+    ...     solver.solve_substep(state, h, use_bias=False)
+    >>> solver.end_step(state, h)
     >>> bool(0.49 < box.position[1] < 0.5), bool(abs(box.velocity[1]) < 1e-9)
     (True, True)
     """
@@ -221,13 +178,13 @@ class SoftStepSolver(ContactPreparation):
             np.where(against_static, s2, s1) for s1, s2 in zip(soft, stiff))
         self._max_normal = np.zeros(c.point_count)
 
-    def separations(self, states: BodyStates) -> np.ndarray:
+    def separations(self, state: BodyState) -> np.ndarray:
         """Separation (m, < 0 overlapping) of each contact point now, per point in
         manifold order: the separation at the start of the step, plus how far the two
         material points that touched there have moved apart along the normal."""
         c = self._contacts
-        moved = states.position[self._rows] - c.centre
-        turned = states.angle[self._rows] - self._start_angle
+        moved = state.position[self._rows] - c.centre
+        turned = state.angle[self._rows] - self._start_angle
         cos_less_1, sin = np.cos(turned) - 1.0, np.sin(turned)
         # ((R - I) r) . n = (cos - 1) (r . n) + sin (r x n) for a turn R of the lever arm r.
         a, b = c.a, c.b
@@ -235,8 +192,8 @@ class SoftStepSolver(ContactPreparation):
                 + cos_less_1[b] * self._r_dot_n_b + sin[b] * self._r_cross_n_b
                 - cos_less_1[a] * self._r_dot_n_a - sin[a] * self._r_cross_n_a - c.depth)
 
-    def solve_substep(self, states: BodyStates, h: float, use_bias: bool) -> None:
-        """One pass of ``iterations`` sweeps on ``states``: warm start and soft solve
+    def solve_substep(self, state: BodyState, h: float, use_bias: bool) -> None:
+        """One pass of ``iterations`` sweeps on ``state``: warm start and soft solve
         (``use_bias``), or relax (rigid, no push; skipped when ``settings.relax`` is off).
 
         The biased pass must come before the sub-step's position update, the relax
@@ -246,13 +203,13 @@ class SoftStepSolver(ContactPreparation):
         c = self._contacts
         if not c.point_count or (not use_bias and not settings.relax):
             return
-        velocity = states.velocity[self._rows]
+        velocity = state.velocity[self._rows]
         if use_bias:
             velocity = self.apply_impulses(c, velocity, c.normal_total, c.tangent_total)
-            separation = self._separation if self._separation is not None else self.separations(states)
+            separation = self._separation if self._separation is not None else self.separations(state)
             self._separation = None                             # positions move next
         else:
-            separation = self._separation = self.separations(states)
+            separation = self._separation = self.separations(state)
         separation = separation[c.order]
         opened = separation > 0.0
         target = np.where(opened, -separation / h, 0.0)       # closing allowed up to s / h (m/s)
@@ -269,9 +226,9 @@ class SoftStepSolver(ContactPreparation):
         c.normal_total[c.order], c.tangent_total[c.order] = normal, tangent
         if use_bias:
             np.maximum(self._max_normal, c.normal_total, out=self._max_normal)
-        states.velocity[self._rows] = velocity * states.dynamic[self._rows, None]
+        state.velocity[self._rows] = velocity * state.dynamic[self._rows, None]
 
-    def end_step(self, states: BodyStates, h: float) -> None:
+    def end_step(self, state: BodyState, h: float) -> None:
         """Restitution, then remember the impulses and fill ``stats``.
 
         Restitution: one sweep over the points that closed faster than
@@ -283,12 +240,12 @@ class SoftStepSolver(ContactPreparation):
             bounce = ((c.normal_velocity < -self.settings.restitution_threshold) & (self._max_normal > 0.0)
                       & (c.restitution > 0.0))
             if bounce.any():
-                velocity = states.velocity[self._rows]
+                velocity = state.velocity[self._rows]
                 normal, tangent = c.normal_total[c.order], c.tangent_total[c.order]
                 kernel(self.backend)(velocity, c.rows, 1, normal, tangent,
                                               (-c.restitution * c.normal_velocity)[c.order],
                                               bounce[c.order].astype(float), np.zeros(c.point_count),
                                               use_friction=False, use_block=False)
                 c.normal_total[c.order], c.tangent_total[c.order] = normal, tangent
-                states.velocity[self._rows] = velocity * states.dynamic[self._rows, None]
+                state.velocity[self._rows] = velocity * state.dynamic[self._rows, None]
         self.end_contacts(c, h)

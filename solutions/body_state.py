@@ -1,0 +1,65 @@
+"""The one body state: poses and velocities of a world's bodies as arrays.
+
+A :class:`~solutions.body.Body` does not hold its own position or velocity: it is a
+handle on one row (its *slot*) of a :class:`BodyState`.  A body made on its own gets a
+state of one row; a :class:`~solutions.world.World` gathers its bodies into one state
+of ``n`` rows and binds each body to its row, so that every stage of the step (and the
+compiled twins) reads and writes the same arrays, and ``body.position`` always says
+where the world has put the body.  Nothing is copied between stages.
+
+Arrays (row ``k`` is the body in slot ``k``):
+
+- ``position`` (n, 2): centre of mass (m);
+- ``angle`` (n,): rad, counter-clockwise;
+- ``velocity`` (n, 3): rows ``(vx, vy, w)`` in m/s and rad/s;
+- ``dynamic`` (n,): the body moves (not static);
+- ``turning`` (n,): the body turns (finite inertia).
+
+>>> state = BodyState(2)
+>>> state.position[1] = (3.0, 4.0)
+>>> state.position.tolist(), state.velocity.shape
+([[0.0, 0.0], [3.0, 4.0]], (2, 3))
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+class BodyState:
+    """Poses and velocities of ``n`` bodies (module docstring)."""
+
+    def __init__(self, n: int):
+        self.position = np.zeros((n, 2))
+        self.angle = np.zeros(n)
+        self.velocity = np.zeros((n, 3))
+        self.dynamic = np.zeros(n, dtype=bool)
+        self.turning = np.zeros(n, dtype=bool)
+
+    def __len__(self) -> int:
+        return len(self.angle)
+
+    @classmethod
+    def gather(cls, bodies) -> "BodyState":
+        """One state holding every body's pose and velocity, each body bound to its
+        row (slot ``k`` for ``bodies[k]``); a body bound before (on its own or in
+        another world) moves here with its current values."""
+        state = cls(len(bodies))
+        for slot, body in enumerate(bodies):
+            state.position[slot] = body.position
+            state.angle[slot] = body.angle
+            state.velocity[slot, :2] = body.velocity
+            state.dynamic[slot] = not body.is_static
+            state.turning[slot] = body.inverse_inertia > 0.0
+            # A body that cannot turn has no angular velocity (the solver never gives it one).
+            state.velocity[slot, 2] = body.angular_velocity if state.turning[slot] else 0.0
+            body.bind(state, slot)
+        return state
+
+    def integrate_velocities(self, gravity: np.ndarray, h: float) -> None:
+        """v += h g for the dynamic bodies (``gravity`` in m/s^2, ``h`` in s)."""
+        self.velocity[self.dynamic, :2] += h * gravity
+
+    def integrate_positions(self, h: float) -> None:
+        """x += h v for the dynamic bodies, angle += h w for the turning ones."""
+        self.position[self.dynamic] += h * self.velocity[self.dynamic, :2]
+        self.angle[self.turning] += h * self.velocity[self.turning, 2]

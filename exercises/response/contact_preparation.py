@@ -114,6 +114,17 @@ class ContactPreparation:
         self.contact_impulses: list[tuple] = []
         self.reset()
 
+    @property
+    def contact_impulses(self) -> list[tuple]:
+        """See the class docstring (made when first asked for, after a compiled step)."""
+        if callable(self._contact_impulses):
+            self._contact_impulses = self._contact_impulses()
+        return self._contact_impulses
+
+    @contact_impulses.setter
+    def contact_impulses(self, value) -> None:
+        self._contact_impulses = value
+
     def reset(self) -> None:
         """Forget last step's impulses (for example after bodies were removed and
         indices changed meaning)."""

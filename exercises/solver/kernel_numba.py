@@ -17,7 +17,7 @@ from numba import njit
 from .constraint_rows import ConstraintRows
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always", error_model="numpy")
 def _block_normal_impulses(k11, k12, k22, b1, b2):
     det = k11 * k22 - k12 * k12
     x1 = (k12 * b2 - k22 * b1) / det
@@ -35,7 +35,7 @@ def _block_normal_impulses(k11, k12, k22, b1, b2):
     return np.nan, np.nan
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always", error_model="numpy")
 def _friction(k, v, a, b, nx, ny, ima, imb, iia, iib, rt_a, rt_b, mass_tangent, mu_of, normal, tangent,
               normal_change, accumulate):
     mu = mu_of[k]
@@ -61,7 +61,7 @@ def _friction(k, v, a, b, nx, ny, ima, imb, iia, iib, rt_a, rt_b, mass_tangent, 
     v[b, 2] += iib * rt_b[k] * change
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _solve(v, a_of, b_of, nx_of, ny_of, ima_of, imb_of, iia_of, iib_of, first_of, count_of, block_of,
            k11_of, k12_of, k22_of, rn_a, rn_b, rt_a, rt_b, mass_normal, mass_tangent, mu_of, lower_of,
            iterations, normal, tangent, target, mass_scale, impulse_scale, accumulate, friction_first,

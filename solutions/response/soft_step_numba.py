@@ -1,0 +1,505 @@
+"""The soft step compiled whole, for worlds of boxes: the twin of :meth:`World.soft_step`.
+
+:meth:`solutions.world.World.soft_step` is the teaching text: broad phase, speculative
+narrow phase, prestep, warm start, soft solve and relax per sub-step, restitution and
+the impulse memory, each stage readable on its own.  Each stage builds Python objects
+(shapes, contacts, dictionaries of remembered impulses), and on a 20-base pyramid
+(210 boxes, about 540 manifolds) those cost a hundred times what the arithmetic does.
+This module runs the same stages, in the same order and with the same floating-point
+operations, as one compiled function over the world's
+:class:`~solutions.body_state.BodyState` arrays:
+
+1. the boxes' AABBs widened by ``SPECULATIVE_MARGIN`` and a sort-and-sweep on ``min_x``
+   for the candidate pairs, kept in the world's sorted ``(i, j)`` order, no
+   static-static pair;
+2. the speculative manifolds of every candidate pair
+   (:mod:`solutions.narrowphase.box_pairs_numba`, itself the twin of the numpy batch);
+3. the prestep of :class:`~solutions.response.contact_preparation.ContactPreparation`
+   (lever arms, effective masses, the restitution target, last step's impulses matched
+   by feature id or else by the nearest point, the sweep order and the 2x2 blocks);
+4. the sub-steps of :class:`~solutions.response.soft_step.SoftStepSolver` (gravity,
+   warm start, soft solve, positions, relax), each pass the compiled solver kernel
+   (:func:`solutions.solver.kernel_numba._solve`);
+5. restitution, and the impulses remembered for the next step.
+
+It covers a world whose every body is a box (``Body.box``: an OBB centred on the body)
+without joints or bullets, with rotation and accumulated impulses on; chosen by
+``WorldSettings(backend="numba", soft_step=True)`` (:attr:`World.compiled_soft_step`),
+every other world runs the readable stages with their compiled twins.  Tested equal
+to the readable step to 1e-12 on every box scene over 1 s and on random piles
+(``tests/test_soft_step_numba.py``).  Contacts are made into
+:class:`~solutions.contact.Contact` objects only when asked for (``world.manifolds``).
+
+Conventions: SI units; normal from body ``i`` to body ``j`` of a pair ``i < j``; a
+feature id ``(ref, face, incident_face, vertex)`` is stored as the integer
+``((ref_is_b * 4 + face) * 4 + incident_face) * 4 + vertex``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..contact import Contact
+from ..narrowphase.box_pairs_numba import _box_faces, _manifolds_kernel, matmul_rounding
+from ..narrowphase.speculative import SPECULATIVE_MARGIN
+from ..shapes import OBB
+from ..solver.constraint_rows import MAX_CONDITION_NUMBER
+from ..solver.kernel_numba import _solve
+from .contact_preparation import COLOURS_MIN_MANIFOLDS
+from .soft_step import soft_coefficients
+from .solver_settings import SolverStats
+
+
+@njit(cache=True)
+def _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding):
+    """Pairs ``i < j`` of boxes whose AABBs widened by ``margin / 2`` overlap or touch,
+    not both static, as sorted keys ``i * n + j``."""
+    n = angle.shape[0]
+    aabb = np.empty((n, 4))
+    vertices, normals = np.empty((4, 2)), np.empty((4, 2))
+    grow = 0.5 * margin
+    for i in range(n):
+        _box_faces(position[i, 0], position[i, 1], half[i, 0], half[i, 1], math.cos(angle[i]),
+                   math.sin(angle[i]), corner_rounding, vertices, normals)
+        aabb[i, 0] = min(vertices[0, 0], vertices[1, 0], vertices[2, 0], vertices[3, 0]) + (-grow)
+        aabb[i, 1] = min(vertices[0, 1], vertices[1, 1], vertices[2, 1], vertices[3, 1]) + (-grow)
+        aabb[i, 2] = max(vertices[0, 0], vertices[1, 0], vertices[2, 0], vertices[3, 0]) + grow
+        aabb[i, 3] = max(vertices[0, 1], vertices[1, 1], vertices[2, 1], vertices[3, 1]) + grow
+    rank = np.argsort(aabb[:, 0])
+    keys = np.empty(16 * n + 16, dtype=np.int64)
+    found = 0
+    for r in range(n):
+        i = rank[r]
+        for s in range(r + 1, n):
+            j = rank[s]
+            if aabb[j, 0] > aabb[i, 2]:
+                break
+            if aabb[j, 1] > aabb[i, 3] or aabb[i, 1] > aabb[j, 3] or not (dynamic[i] or dynamic[j]):
+                continue
+            if found == keys.shape[0]:
+                grown = np.empty(2 * found, dtype=np.int64)
+                grown[:found] = keys
+                keys = grown
+            keys[found] = min(i, j) * n + max(i, j)
+            found += 1
+    return np.sort(keys[:found])
+
+
+@njit(cache=True)
+def _sweep_order(body_a, body_b, movable, colours):
+    """:func:`solutions.solver.sweep_order.sweep_order`'s order (its batches, stably sorted)."""
+    m = body_a.shape[0]
+    batch = np.empty(m, dtype=np.int64)
+    if colours:
+        used = np.zeros(movable.shape[0], dtype=np.int64)     # bit c: the body has colour c
+        for k in range(m):
+            i, j = body_a[k], body_b[k]
+            taken = (used[i] if movable[i] else 0) | (used[j] if movable[j] else 0)
+            c = 0
+            while (taken >> c) & 1:
+                c += 1
+            if c > 62:
+                raise ValueError("a body touches more than 62 colours of manifolds")
+            batch[k] = c
+            if movable[i]:
+                used[i] |= 1 << c
+            if movable[j]:
+                used[j] |= 1 << c
+    else:
+        after = np.zeros(movable.shape[0], dtype=np.int64)
+        for k in range(m):
+            i, j = body_a[k], body_b[k]
+            c = max(after[i] if movable[i] else 0, after[j] if movable[j] else 0)
+            batch[k] = c
+            if movable[i]:
+                after[i] = c + 1
+            if movable[j]:
+                after[j] = c + 1
+    return np.argsort(batch, kind="mergesort")
+
+
+@njit(cache=True)
+def _recall(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_normal, old_tangent,
+            first_of, count_of, match_distance, normal_total, tangent_total):
+    """``ContactPreparation._recall_impulses`` on arrays: per point, the old point of the
+    same pair with the same feature id, else the nearest untaken one within
+    ``match_distance``; their impulses go to ``normal_total``/``tangent_total``."""
+    old_count = old_key.shape[0]
+    found = np.full(pair_key.shape[0], -1, dtype=np.int64)
+    for g in range(first_of.shape[0]):
+        start, count = first_of[g], count_of[g]
+        key = pair_key[start]
+        # The old points of this pair: a contiguous run (old keys are sorted).
+        lo = np.searchsorted(old_key, key)
+        hi = lo
+        while hi < old_count and old_key[hi] == key:
+            hi += 1
+        for k in range(start, start + count):
+            for q in range(lo, hi):          # the last old point with this key, as a dict keeps it
+                if old_feature[q] == feature[k]:
+                    found[k] = q
+        unmatched = np.empty(hi - lo, dtype=np.int64)
+        left = 0
+        for q in range(lo, hi):
+            taken = False
+            for k in range(start, start + count):
+                if found[k] >= 0 and old_feature[found[k]] == old_feature[q]:
+                    taken = True
+            if not taken:
+                unmatched[left] = q
+                left += 1
+        for k in range(start, start + count):
+            if found[k] >= 0:
+                continue
+            if left == 0:
+                break
+            nearest, best = 0, math.inf
+            for u in range(left):
+                d = math.hypot(old_x[unmatched[u]] - px[k], old_y[unmatched[u]] - py[k])
+                if d < best:
+                    nearest, best = u, d
+            if best <= match_distance:
+                found[k] = unmatched[nearest]
+                for u in range(nearest, left - 1):
+                    unmatched[u] = unmatched[u + 1]
+                left -= 1
+    for k in range(found.shape[0]):
+        if found[k] >= 0:
+            normal_total[k], tangent_total[k] = old_normal[found[k]], old_tangent[found[k]]
+
+
+@njit(cache=True)
+def _separations(position, angle, a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, r_cross_n_a,
+                 r_cross_n_b, depth, cos_less_1, sin, out):
+    """``SoftStepSolver.separations``: each point's separation now, in manifold order
+    (``cos_less_1`` and ``sin``, one per body, are work space)."""
+    for i in range(angle.shape[0]):
+        turned = angle[i] - start_angle[i]
+        cos_less_1[i], sin[i] = math.cos(turned) - 1.0, math.sin(turned)
+    for k in range(a.shape[0]):
+        i, j = a[k], b[k]
+        dx = (position[j, 0] - centre[j, 0]) - (position[i, 0] - centre[i, 0])
+        dy = (position[j, 1] - centre[j, 1]) - (position[i, 1] - centre[i, 1])
+        out[k] = (dx * nx[k] + dy * ny[k] + cos_less_1[j] * r_dot_n_b[k] + sin[j] * r_cross_n_b[k]
+                  - cos_less_1[i] * r_dot_n_a[k] - sin[i] * r_cross_n_a[k] - depth[k])
+
+
+@njit(cache=True)
+def _zero_static_velocities(velocity, a, b, dynamic):
+    """The readable step's ``velocity * dynamic`` after a pass, on the bodies in contact."""
+    for k in range(a.shape[0]):
+        for i in (a[k], b[k]):
+            if not dynamic[i]:
+                velocity[i, 0] *= 0.0
+                velocity[i, 1] *= 0.0
+                velocity[i, 2] *= 0.0
+
+
+@njit(cache=True)
+def _soft_step(position, angle, velocity, dynamic, turning, half, inverse_mass, inverse_inertia, friction_of,
+               restitution_of, old_key, old_feature, old_x, old_y, old_normal, old_tangent, dt_ratio, h, substeps,
+               gravity_x, gravity_y, iterations, soft, stiff, relax, max_push, restitution_threshold,
+               use_friction, warm_start, match_distance, block_solver, order_kind, margin, corner_rounding,
+               incident_rounding):
+    n = angle.shape[0]
+    # 1. Candidate pairs, 2. speculative manifolds of every pair.
+    keys = _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding)
+    m = keys.shape[0]
+    centre_a, centre_b, half_a, half_b = np.empty((m, 2)), np.empty((m, 2)), np.empty((m, 2)), np.empty((m, 2))
+    angle_a, angle_b = np.empty(m), np.empty(m)
+    for k in range(m):
+        i, j = keys[k] // n, keys[k] % n
+        centre_a[k, 0], centre_a[k, 1], half_a[k, 0], half_a[k, 1] = position[i, 0], position[i, 1], half[i, 0], half[i, 1]
+        centre_b[k, 0], centre_b[k, 1], half_b[k, 0], half_b[k, 1] = position[j, 0], position[j, 1], half[j, 0], half[j, 1]
+        angle_a[k], angle_b[k] = angle[i], angle[j]
+    found, normal, count, points, separations, ref_is_b, ref_face, inc_face, vertex = _manifolds_kernel(
+        centre_a, half_a, angle_a, centre_b, half_b, angle_b, margin, corner_rounding, incident_rounding)
+
+    # The manifolds in pair order and their points in manifold order.
+    g_count = 0
+    p_count = 0
+    for k in range(m):
+        if found[k]:
+            g_count += 1
+            p_count += count[k]
+    man_pair, man_count, man_first = np.empty(g_count, np.int64), np.empty(g_count, np.int64), np.empty(g_count, np.int64)
+    a, b = np.empty(p_count, np.int64), np.empty(p_count, np.int64)
+    nx, ny, px, py, sep = np.empty(p_count), np.empty(p_count), np.empty(p_count), np.empty(p_count), np.empty(p_count)
+    feature, pair_key = np.empty(p_count, np.int64), np.empty(p_count, np.int64)
+    g = 0
+    p = 0
+    for k in range(m):
+        if not found[k]:
+            continue
+        man_pair[g], man_count[g], man_first[g] = keys[k], count[k], p
+        for s in range(count[k]):
+            a[p], b[p] = keys[k] // n, keys[k] % n
+            nx[p], ny[p] = normal[k, 0], normal[k, 1]
+            px[p], py[p] = points[k, s, 0], points[k, s, 1]
+            sep[p] = separations[k, s]
+            feature[p] = ((np.int64(ref_is_b[k]) * 4 + ref_face[k]) * 4 + inc_face[k]) * 4 + vertex[k, s]
+            pair_key[p] = keys[k]
+            p += 1
+        g += 1
+
+    # 3. The prestep (ContactPreparation.prepare and SoftStepSolver.begin_step).
+    centre = position.copy()
+    start_angle = angle.copy()
+    depth = np.empty(p_count)
+    rn_a, rn_b, rt_a, rt_b = np.empty(p_count), np.empty(p_count), np.empty(p_count), np.empty(p_count)
+    r_dot_n_a, r_dot_n_b = np.empty(p_count), np.empty(p_count)
+    ima, imb, iia, iib = np.empty(p_count), np.empty(p_count), np.empty(p_count), np.empty(p_count)
+    mass_normal, mass_tangent = np.empty(p_count), np.empty(p_count)
+    mu, restitution, normal_velocity = np.empty(p_count), np.empty(p_count), np.empty(p_count)
+    rax, ray, rbx, rby = np.empty(p_count), np.empty(p_count), np.empty(p_count), np.empty(p_count)
+    for k in range(p_count):
+        i, j = a[k], b[k]
+        depth[k] = -sep[k]
+        restitution[k] = restitution_of[i] * restitution_of[j]
+        mu[k] = friction_of[i] * friction_of[j] if use_friction else 0.0
+        rax[k], ray[k] = px[k] - centre[i, 0], py[k] - centre[i, 1]
+        rbx[k], rby[k] = px[k] - centre[j, 0], py[k] - centre[j, 1]
+        rn_a[k] = rax[k] * ny[k] - ray[k] * nx[k]
+        rn_b[k] = rbx[k] * ny[k] - rby[k] * nx[k]
+        rt_a[k] = -(rax[k] * nx[k] + ray[k] * ny[k])
+        rt_b[k] = -(rbx[k] * nx[k] + rby[k] * ny[k])
+        r_dot_n_a[k] = rax[k] * nx[k] + ray[k] * ny[k]
+        r_dot_n_b[k] = rbx[k] * nx[k] + rby[k] * ny[k]
+        ima[k], imb[k], iia[k], iib[k] = inverse_mass[i], inverse_mass[j], inverse_inertia[i], inverse_inertia[j]
+        k_normal = ima[k] + imb[k] + iia[k] * (rn_a[k] * rn_a[k]) + iib[k] * (rn_b[k] * rn_b[k])
+        k_tangent = ima[k] + imb[k] + iia[k] * (rt_a[k] * rt_a[k]) + iib[k] * (rt_b[k] * rt_b[k])
+        mass_normal[k] = 1.0 / k_normal if k_normal > 0.0 else 0.0
+        mass_tangent[k] = 1.0 / k_tangent if k_tangent > 0.0 else 0.0
+        normal_velocity[k] = ((velocity[j, 0] - velocity[i, 0]) * nx[k] + (velocity[j, 1] - velocity[i, 1]) * ny[k]
+                              + velocity[j, 2] * rn_b[k] - velocity[i, 2] * rn_a[k])
+    normal_total, tangent_total = np.zeros(p_count), np.zeros(p_count)
+    if warm_start:
+        _recall(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_normal, old_tangent,
+                man_first, man_count, match_distance, normal_total, tangent_total)
+        for k in range(p_count):
+            normal_total[k] *= dt_ratio
+            tangent_total[k] *= dt_ratio if use_friction else 0.0
+    warm_started = 0
+    if warm_start:
+        for k in range(p_count):
+            if normal_total[k] != 0.0:
+                warm_started += 1
+
+    # The rows in sweep order (ContactPreparation._sweep_rows).
+    movable = np.empty(n, dtype=np.bool_)
+    for i in range(n):
+        movable[i] = inverse_mass[i] + inverse_inertia[i] > 0.0
+    body_a, body_b = np.empty(g_count, np.int64), np.empty(g_count, np.int64)
+    for q in range(g_count):
+        body_a[q], body_b[q] = man_pair[q] // n, man_pair[q] % n
+    colours = order_kind == 2 or (order_kind == 0 and g_count >= COLOURS_MIN_MANIFOLDS)
+    manifold_order = _sweep_order(body_a, body_b, movable, colours)
+    order = np.empty(p_count, np.int64)
+    first = np.empty(g_count, np.int64)
+    row_count = np.empty(g_count, np.int64)
+    r = 0
+    for q in range(g_count):
+        src = manifold_order[q]
+        first[q], row_count[q] = r, man_count[src]
+        for s in range(man_count[src]):
+            order[r] = man_first[src] + s
+            r += 1
+    g_a, g_b, g_nx, g_ny = np.empty(g_count, np.int64), np.empty(g_count, np.int64), np.empty(g_count), np.empty(g_count)
+    g_ima, g_imb, g_iia, g_iib = np.empty(g_count), np.empty(g_count), np.empty(g_count), np.empty(g_count)
+    block = np.zeros(g_count, dtype=np.bool_)
+    k11, k12, k22 = np.zeros(g_count), np.zeros(g_count), np.zeros(g_count)
+    for q in range(g_count):
+        k1 = order[first[q]]
+        g_a[q], g_b[q], g_nx[q], g_ny[q] = a[k1], b[k1], nx[k1], ny[k1]
+        g_ima[q], g_imb[q], g_iia[q], g_iib[q] = ima[k1], imb[k1], iia[k1], iib[k1]
+        if row_count[q] == 2:
+            k2 = order[first[q] + 1]
+            c11 = ima[k1] + imb[k1] + iia[k1] * rn_a[k1] * rn_a[k1] + iib[k1] * rn_b[k1] * rn_b[k1]
+            c22 = ima[k1] + imb[k1] + iia[k1] * rn_a[k2] * rn_a[k2] + iib[k1] * rn_b[k2] * rn_b[k2]
+            c12 = ima[k1] + imb[k1] + iia[k1] * rn_a[k1] * rn_a[k2] + iib[k1] * rn_b[k1] * rn_b[k2]
+            if block_solver and max(c11, c22) ** 2 < MAX_CONDITION_NUMBER * (c11 * c22 - c12 * c12):
+                block[q] = True
+                k11[q], k12[q], k22[q] = c11, c12, c22
+    s_rn_a, s_rn_b, s_rt_a, s_rt_b = rn_a[order], rn_b[order], rt_a[order], rt_b[order]
+    s_mass_normal, s_mass_tangent, s_mu = mass_normal[order], mass_tangent[order], mu[order]
+    lower = np.zeros(p_count)
+    normal_s, tangent_s = normal_total[order], tangent_total[order]
+    bias_rate, mass_scale_soft, impulse_scale_soft = np.empty(p_count), np.empty(p_count), np.empty(p_count)
+    for r in range(p_count):
+        k = order[r]
+        coefficients = stiff if (ima[k] == 0.0 or imb[k] == 0.0) else soft
+        bias_rate[r], mass_scale_soft[r], impulse_scale_soft[r] = coefficients[0], coefficients[1], coefficients[2]
+    max_normal = np.zeros(p_count)
+
+    # 4. The sub-steps.
+    separation = sep.copy()          # manifold order; the start's for the first biased pass
+    separation_is_current = True     # (later: the relax pass's, or computed again without relax)
+    target, mass_scale, impulse_scale = np.empty(p_count), np.empty(p_count), np.empty(p_count)
+    zeros = np.zeros(p_count)
+    body_cos_less_1, body_sin = np.empty(n), np.empty(n)
+    for _ in range(substeps):
+        for i in range(n):
+            if dynamic[i]:
+                velocity[i, 0] += h * gravity_x
+                velocity[i, 1] += h * gravity_y
+        for biased in (True, False):
+            if p_count and (biased or relax):
+                if biased:      # warm start: the accumulated impulses (manifold order), A then B
+                    for k in range(p_count):
+                        pn, pt = normal_total[k], tangent_total[k]
+                        ix, iy = pn * nx[k] + pt * ny[k], pn * ny[k] + pt * (-nx[k])
+                        velocity[a[k], 0] += -(ima[k] * ix)
+                        velocity[a[k], 1] += -(ima[k] * iy)
+                        velocity[a[k], 2] += -(iia[k] * (rax[k] * iy - ray[k] * ix))
+                    for k in range(p_count):
+                        pn, pt = normal_total[k], tangent_total[k]
+                        ix, iy = pn * nx[k] + pt * ny[k], pn * ny[k] + pt * (-nx[k])
+                        velocity[b[k], 0] += imb[k] * ix
+                        velocity[b[k], 1] += imb[k] * iy
+                        velocity[b[k], 2] += iib[k] * (rbx[k] * iy - rby[k] * ix)
+                if not (biased and separation_is_current):
+                    _separations(position, angle, a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, rn_a,
+                                 rn_b, depth, body_cos_less_1, body_sin, separation)
+                separation_is_current = not biased      # positions move after a biased pass
+                for r in range(p_count):
+                    s = separation[order[r]]
+                    if s > 0.0:
+                        target[r], mass_scale[r], impulse_scale[r] = -s / h, 1.0, 0.0
+                    elif biased:
+                        target[r] = min(-bias_rate[r] * s, max_push)
+                        mass_scale[r], impulse_scale[r] = mass_scale_soft[r], impulse_scale_soft[r]
+                    else:
+                        target[r], mass_scale[r], impulse_scale[r] = 0.0, 1.0, 0.0
+                _solve(velocity, g_a, g_b, g_nx, g_ny, g_ima, g_imb, g_iia, g_iib, first, row_count, block, k11,
+                       k12, k22, s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal, s_mass_tangent, s_mu, lower,
+                       iterations, normal_s, tangent_s, target, mass_scale, impulse_scale, True, False, True, True)
+                for r in range(p_count):
+                    normal_total[order[r]], tangent_total[order[r]] = normal_s[r], tangent_s[r]
+                    if biased:
+                        max_normal[r] = max(max_normal[r], normal_s[r])
+                _zero_static_velocities(velocity, a, b, dynamic)
+            if biased:      # positions between the two passes
+                for i in range(n):
+                    if dynamic[i]:
+                        position[i, 0] += h * velocity[i, 0]
+                        position[i, 1] += h * velocity[i, 1]
+                    if turning[i]:
+                        angle[i] += h * velocity[i, 2]
+
+    # 5. Restitution (SoftStepSolver.end_step).
+    if p_count:
+        bouncing = False
+        for r in range(p_count):
+            k = order[r]
+            bounce = normal_velocity[k] < -restitution_threshold and max_normal[r] > 0.0 and restitution[k] > 0.0
+            target[r] = -restitution[k] * normal_velocity[k]
+            mass_scale[r] = 1.0 if bounce else 0.0
+            bouncing = bouncing or bounce
+        if bouncing:
+            _solve(velocity, g_a, g_b, g_nx, g_ny, g_ima, g_imb, g_iia, g_iib, first, row_count, block, k11, k12,
+                   k22, s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal, s_mass_tangent, s_mu, lower, 1, normal_s,
+                   tangent_s, target, mass_scale, zeros, True, False, False, False)
+            for r in range(p_count):
+                normal_total[order[r]], tangent_total[order[r]] = normal_s[r], tangent_s[r]
+            _zero_static_velocities(velocity, a, b, dynamic)
+    block_count = 0
+    for q in range(g_count):
+        if block[q]:
+            block_count += 1
+    return (m, man_pair, man_count, pair_key, feature, px, py, nx, ny, sep, a, b, normal_total, tangent_total,
+            warm_started, block_count)
+
+
+#: ``SolverSettings.order`` as the compiled step takes it.
+ORDER_KINDS = {"auto": 0, "manifolds": 1, "colours": 2}
+
+
+class CompiledSoftStep:
+    """:meth:`World.soft_step` compiled whole, for a world of boxes (module docstring).
+
+    Holds the bodies' constant arrays (half-extents, inverse masses and inertias,
+    friction, restitution) and last step's contact points and impulses (the warm
+    start), in the form the compiled function takes.
+    """
+
+    def __init__(self, bodies):
+        self.half = np.array([body.shape.half_extents for body in bodies], dtype=float).reshape(-1, 2)
+        self.inverse_mass = np.array([body.inverse_mass for body in bodies], dtype=float)
+        self.inverse_inertia = np.array([body.inverse_inertia for body in bodies], dtype=float)
+        self.friction = np.array([body.friction for body in bodies], dtype=float)
+        self.restitution = np.array([body.restitution for body in bodies], dtype=float)
+        self.body_count = len(bodies)
+        self.reset()
+
+    @staticmethod
+    def supports(world) -> bool:
+        """Whether this twin can step ``world``: every body a ``Body.box`` (an OBB centred
+        on it), no joints, no bullet under continuous detection, rotation and
+        accumulated impulses on."""
+        settings = world.settings
+        return (settings.soft_step and settings.backend == "numba" and not world.joints
+                and settings.solver.rotation and settings.solver.accumulate_impulses
+                and not (settings.continuous and any(b.is_bullet and not b.is_static for b in world.bodies))
+                and all(isinstance(b.shape, OBB) and not b.shape.center.any() and b.shape.angle == 0.0
+                        for b in world.bodies))
+
+    def reset(self) -> None:
+        """Forget last step's impulses."""
+        empty_int, empty = np.zeros(0, dtype=np.int64), np.zeros(0)
+        self.memory = (empty_int, empty_int, empty, empty, empty, empty)
+        self.previous_h = None
+        self.last = None
+
+    def step(self, state, h: float, substeps: int, gravity, settings) -> None:
+        """One step of ``substeps`` sub-steps of ``h`` (s) on ``state`` (updated in place)."""
+        solver = settings.solver
+        hertz = min(solver.contact_hertz, 0.25 / h)
+        soft = soft_coefficients(hertz, solver.contact_damping_ratio, h)
+        stiff = soft_coefficients(2.0 * hertz, solver.contact_damping_ratio, h)
+        dt_ratio = 1.0 if self.previous_h is None else h / self.previous_h
+        corner_rounding, incident_rounding, _ = matmul_rounding()
+        result = _soft_step(state.position, state.angle, state.velocity, state.dynamic, state.turning, self.half,
+                            self.inverse_mass, self.inverse_inertia, self.friction, self.restitution, *self.memory,
+                            float(dt_ratio), float(h), int(substeps), float(gravity[0]), float(gravity[1]),
+                            int(solver.iterations), soft, stiff, bool(solver.relax), float(solver.max_push_velocity),
+                            float(solver.restitution_threshold), bool(solver.friction), bool(solver.warm_starting),
+                            float(solver.warm_start_match_distance), bool(solver.block_solver),
+                            ORDER_KINDS[solver.order], float(SPECULATIVE_MARGIN), corner_rounding, incident_rounding)
+        (self.candidate_pairs, man_pair, man_count, pair_key, feature, px, py, nx, ny, sep, a, b, normal_total,
+         tangent_total, warm_started, block_count) = result
+        self.memory = (pair_key, feature, px, py, normal_total, tangent_total)
+        self.previous_h = h
+        self.last = result
+        self.stats = SolverStats(manifolds=len(man_pair), contact_points=len(px),
+                                 total_normal_impulse=float(normal_total.sum()),
+                                 max_penetration=float((-sep).max(initial=0.0)),
+                                 warm_started_points=int(warm_started), block_manifolds=int(block_count))
+
+    def contacts(self) -> list:
+        """The last step's manifolds as ``(i, j, Contact)``, as the readable step gives them."""
+        if self.last is None:
+            return []
+        _, man_pair, man_count, _, feature, px, py, nx, ny, sep, _, _, _, _, _, _ = self.last
+        out, p, n = [], 0, self.body_count
+        for key, count in zip(man_pair.tolist(), man_count.tolist()):
+            depths = np.maximum(-sep[p:p + count], 0.0)
+            ids = []
+            for code in feature[p:p + count].tolist():
+                ref_face, vertex = divmod(code, 4)
+                ref_face, incident = divmod(ref_face, 4)
+                ref, face = divmod(ref_face, 4)
+                ids.append(("B" if ref else "A", face, incident, vertex))
+            points = np.column_stack([px[p:p + count], py[p:p + count]])
+            out.append((key // n, key % n, Contact((nx[p], ny[p]), depths.max(), points, depths, tuple(ids))))
+            p += count
+        return out
+
+    def contact_impulses(self) -> list[tuple]:
+        """``(i, j, point, normal_impulse, tangent_impulse)`` per contact point of the last step."""
+        if self.last is None:
+            return []
+        _, _, _, _, _, px, py, _, _, _, a, b, normal_total, tangent_total, _, _ = self.last
+        return list(zip(a.tolist(), b.tolist(), zip(px.tolist(), py.tolist()), normal_total.tolist(),
+                        tangent_total.tolist()))

@@ -1,0 +1,98 @@
+"""The soft step compiled whole (solutions/response/soft_step_numba.py) equals the
+readable soft step of World: the same motion to 1e-12 on random piles of boxes under
+every switch of the soft step, and the same contacts, impulses and figures.  (The hard
+scenes of boxes are stepped side by side in tests/test_solver_kernel.py, whose numba
+worlds run this step.)"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from solutions.body import Body
+from solutions.response.contact_solver import SolverSettings
+from solutions.scenes import SCENES, get_scene, ground
+from solutions.world import World, WorldSettings
+
+from tests.test_solver_kernel import assert_same_motion
+
+
+def box_pile(seed: int, count: int = 14) -> list[Body]:
+    """A ground and boxes of random sizes, materials and velocities dropped in a heap,
+    some overlapping, some turned, one fixed in rotation."""
+    rng = np.random.default_rng(seed)
+    bodies = [ground(width=14.0, friction=float(rng.uniform(0.2, 1.0)), restitution=float(rng.uniform(0.0, 1.0)))]
+    for k in range(count):
+        bodies.append(Body.box(rng.uniform(0.3, 1.3), rng.uniform(0.3, 1.3), mass=rng.uniform(0.3, 6.0),
+                               position=(rng.uniform(-2.5, 2.5), 0.3 + 0.55 * k), angle=rng.uniform(-0.6, 0.6),
+                               velocity=rng.normal(0.0, 1.5, 2), angular_velocity=rng.normal(0.0, 2.0),
+                               friction=rng.uniform(0.0, 1.0), restitution=rng.uniform(0.0, 0.9),
+                               fixed_rotation=k == 3))
+    bodies.append(Body.box(1.0, 0.4, is_static=True, position=(3.5, 1.5), angle=0.3, friction=0.5))
+    return bodies
+
+
+SWITCHES = [dict(), dict(relax=False), dict(warm_starting=False), dict(block_solver=False),
+            dict(order="colours"), dict(friction=False), dict(iterations=3), dict(contact_hertz=15.0)]
+
+
+def pair(bodies_of, settings: WorldSettings) -> tuple[World, World]:
+    readable = World(bodies_of(), settings)
+    compiled = World(bodies_of(), replace(settings, backend="numba"))
+    assert readable.compiled_soft_step is None and compiled.compiled_soft_step is not None
+    return readable, compiled
+
+
+@pytest.mark.parametrize("switches", SWITCHES, ids=lambda s: ",".join(f"{k}={v}" for k, v in s.items()) or "default")
+@pytest.mark.parametrize("seed", range(2))
+def test_the_compiled_soft_step_moves_random_piles_as_the_readable_one(seed, switches):
+    settings = WorldSettings(soft_step=True, substeps=1 + seed * 3, solver=SolverSettings(**switches))
+    readable, compiled = pair(lambda: box_pile(seed), settings)
+    assert_same_motion(readable, compiled, 1.0, 1 / 60)
+    assert readable.stats.manifolds > 5
+
+
+def test_the_compiled_step_gives_the_readable_contacts_impulses_and_figures():
+    scene = get_scene("pyramid_10")
+    readable, compiled = pair(scene.make_bodies, scene.recommended_settings())
+    for _ in range(20):
+        readable.step(scene.dt)
+        compiled.step(scene.dt)
+    assert compiled.stats == readable.stats and compiled.solver.stats == readable.solver.stats
+    assert compiled.stats.manifolds == 145 and compiled.solver.stats.warm_started_points > 200
+    want, got = readable.manifolds, compiled.manifolds
+    assert [(i, j) for i, j, _ in got] == [(i, j) for i, j, _ in want]
+    for (_, _, c_want), (_, _, c_got) in zip(want, got):
+        assert c_got.feature_ids == c_want.feature_ids
+        for name in ("normal", "points", "depths", "depth"):
+            np.testing.assert_array_equal(getattr(c_got, name), getattr(c_want, name))
+    assert compiled.solver.contact_impulses == readable.solver.contact_impulses
+    assert readable.time == compiled.time
+
+
+def test_the_compiled_step_runs_only_worlds_of_boxes():
+    """Circles, polygons, joints and bullets take the readable stages (with their twins)."""
+    numba_soft = dict(soft_step=True, backend="numba")
+    chosen = {name: scene.build_world(replace(scene.recommended_settings(), **numba_soft)).compiled_soft_step
+              is not None for name, scene in SCENES.items()}
+    assert chosen["pyramid_20"] and chosen["stack_10"] and chosen["friction_ramp"] and chosen["mass_ratio_1000"]
+    assert not chosen["chain_40"] and not chosen["arch"] and not chosen["bullet_wall"] and not chosen["ball_drop"]
+    boxes = box_pile(0)
+    assert World(boxes, WorldSettings(**numba_soft)).compiled_soft_step is not None
+    assert World(box_pile(0), WorldSettings(soft_step=True)).compiled_soft_step is None
+    assert World(box_pile(0), WorldSettings(backend="numba")).compiled_soft_step is None
+    offset = box_pile(0)
+    offset[2] = Body(offset[2].shape.__class__((0.1, 0.0), (0.5, 0.5), 0.0), mass=1.0)   # not centred on its body
+    assert World(offset, WorldSettings(**numba_soft)).compiled_soft_step is None
+
+
+def test_a_second_world_takes_the_bodies_and_the_first_keeps_its_state():
+    bodies = box_pile(1, count=4)
+    first = World(bodies, WorldSettings(soft_step=True, backend="numba"))
+    first.step(1 / 60)
+    kept = first.state.position.copy()
+    second = World(bodies, WorldSettings(soft_step=True, backend="numba"))
+    second.step(1 / 60)
+    np.testing.assert_array_equal(first.state.position, kept)
+    assert bodies[1].position.tolist() == second.state.position[1].tolist() != kept[1].tolist()

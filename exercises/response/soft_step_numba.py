@@ -22,7 +22,7 @@ operations, as one compiled function over the world's
    by feature id or else by the nearest point, the sweep order and the 2x2 blocks);
 4. the sub-steps of :class:`~solutions.response.soft_step.SoftStepSolver` (gravity,
    warm start, soft solve, positions, relax), each pass the compiled solver kernel
-   (:func:`solutions.solver.kernel_numba._solve`);
+   (:data:`solutions.solver.kernel_numba._solve_accumulated`);
 5. restitution, and the impulses remembered for the next step.
 
 It covers a world whose every body is a box (``Body.box``: an OBB centred on the body)
@@ -49,7 +49,7 @@ from ..narrowphase.box_pairs_numba import _box_faces, _manifolds_kernel, matmul_
 from ..narrowphase.speculative import SPECULATIVE_MARGIN
 from ..shapes import OBB
 from ..solver.constraint_rows import MAX_CONDITION_NUMBER
-from ..solver.kernel_numba import _solve
+from ..solver.kernel_numba import _solve_accumulated
 from .contact_preparation import COLOURS_MIN_MANIFOLDS
 from .soft_step import soft_coefficients
 from .solver_settings import SolverStats
@@ -375,9 +375,9 @@ def _soft_step(position, angle, velocity, dynamic, turning, half, inverse_mass, 
                         mass_scale[r], impulse_scale[r] = mass_scale_soft[r], impulse_scale_soft[r]
                     else:
                         target[r], mass_scale[r], impulse_scale[r] = 0.0, 1.0, 0.0
-                _solve(velocity, g_a, g_b, g_nx, g_ny, g_ima, g_imb, g_iia, g_iib, first, row_count, block, k11,
+                _solve_accumulated(velocity, g_a, g_b, g_nx, g_ny, g_ima, g_imb, g_iia, g_iib, first, row_count, block, k11,
                        k12, k22, s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal, s_mass_tangent, s_mu, lower,
-                       iterations, normal_s, tangent_s, target, mass_scale, impulse_scale, True, False, True, True)
+                       iterations, normal_s, tangent_s, target, mass_scale, impulse_scale, False, True, True)
                 for r in range(p_count):
                     normal_total[order[r]], tangent_total[order[r]] = normal_s[r], tangent_s[r]
                     if biased:
@@ -401,9 +401,9 @@ def _soft_step(position, angle, velocity, dynamic, turning, half, inverse_mass, 
             mass_scale[r] = 1.0 if bounce else 0.0
             bouncing = bouncing or bounce
         if bouncing:
-            _solve(velocity, g_a, g_b, g_nx, g_ny, g_ima, g_imb, g_iia, g_iib, first, row_count, block, k11, k12,
+            _solve_accumulated(velocity, g_a, g_b, g_nx, g_ny, g_ima, g_imb, g_iia, g_iib, first, row_count, block, k11, k12,
                    k22, s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal, s_mass_tangent, s_mu, lower, 1, normal_s,
-                   tangent_s, target, mass_scale, zeros, True, False, False, False)
+                   tangent_s, target, mass_scale, zeros, False, False, False)
             for r in range(p_count):
                 normal_total[order[r]], tangent_total[order[r]] = normal_s[r], tangent_s[r]
             _zero_static_velocities(velocity, a, b, dynamic)

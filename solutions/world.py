@@ -182,6 +182,7 @@ class World:
                                         self.settings.solver.warm_starting, backend)
         self.time = 0.0
         self.manifolds = []
+        self._compiled_stats_pending = False
         #: The soft step compiled whole (:mod:`~solutions.response.soft_step_numba`), for a
         #: world of boxes with ``backend="numba"``; None where the readable stages run.
         self.compiled_soft_step = None
@@ -263,17 +264,30 @@ class World:
     def compiled_step(self, h: float) -> None:
         """:meth:`soft_step` as one compiled function (:mod:`~solutions.response.soft_step_numba`)."""
         compiled = self.compiled_soft_step
-        compiled.step(self.state, h, self.settings.substeps, np.asarray(self.settings.gravity, dtype=float),
-                      self.settings)
+        compiled.step(self.state, h, self.settings.substeps, self.settings.gravity, self.settings)
         for _ in range(self.settings.substeps):
             self.time += h
+        # Contacts and figures are made when asked for.
         self.manifolds = compiled.contacts
-        solver_stats = compiled.stats
-        self.stats = StepStats(candidate_pairs=int(compiled.candidate_pairs), manifolds=solver_stats.manifolds,
-                               contact_points=solver_stats.contact_points,
-                               max_penetration=solver_stats.max_penetration)
-        self.solver.stats = solver_stats
+        self._compiled_stats_pending = True
+        self.solver.stats = lambda: compiled.stats
         self.solver.contact_impulses = compiled.contact_impulses
+
+    @property
+    def stats(self) -> StepStats:
+        """What the last sub-step saw (:class:`StepStats`)."""
+        if self._compiled_stats_pending:    # after a compiled step, made when asked for
+            self._compiled_stats_pending = False
+            compiled = self.compiled_soft_step
+            solver_stats = compiled.stats
+            self._stats = StepStats(candidate_pairs=int(compiled.candidate_pairs), manifolds=solver_stats.manifolds,
+                                    contact_points=solver_stats.contact_points,
+                                    max_penetration=solver_stats.max_penetration)
+        return self._stats
+
+    @stats.setter
+    def stats(self, value: StepStats) -> None:
+        self._stats = value
 
     # The stages -----------------------------------------------------------------
     def apply_gravity(self, h: float) -> None:

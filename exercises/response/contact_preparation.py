@@ -115,6 +115,17 @@ class ContactPreparation:
         self.reset()
 
     @property
+    def stats(self) -> SolverStats:
+        """See the class docstring (made when first asked for, after a compiled step)."""
+        if callable(self._stats):
+            self._stats = self._stats()
+        return self._stats
+
+    @stats.setter
+    def stats(self, value) -> None:
+        self._stats = value
+
+    @property
     def contact_impulses(self) -> list[tuple]:
         """See the class docstring (made when first asked for, after a compiled step)."""
         if callable(self._contact_impulses):

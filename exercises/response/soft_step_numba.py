@@ -55,6 +55,15 @@ from .soft_step import soft_coefficients
 from .solver_settings import SolverStats
 
 
+#: Columns of the bodies' constant array (one row per body).
+BODY_HALF_X, BODY_HALF_Y, BODY_INVERSE_MASS, BODY_INVERSE_INERTIA, BODY_FRICTION, BODY_RESTITUTION = range(6)
+#: Columns of the contact points' integer array: pair key ``i * n + j``, feature id, bodies.
+POINT_PAIR, POINT_FEATURE, POINT_A, POINT_B = range(4)
+#: Columns of their float array: point (m), normal, signed separation at the start of the
+#: step (m), accumulated normal and tangent impulses (N s).
+POINT_X, POINT_Y, POINT_NX, POINT_NY, POINT_SEPARATION, POINT_NORMAL_IMPULSE, POINT_TANGENT_IMPULSE = range(7)
+
+
 @njit(cache=True)
 def _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding):
     """Pairs ``i < j`` of boxes whose AABBs widened by ``margin / 2`` overlap or touch,
@@ -131,11 +140,14 @@ def _recall(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_n
     ``match_distance``; their impulses go to ``normal_total``/``tangent_total``."""
     old_count = old_key.shape[0]
     found = np.full(pair_key.shape[0], -1, dtype=np.int64)
+    unmatched = np.empty(old_count, dtype=np.int64)
+    lo = 0
     for g in range(first_of.shape[0]):
         start, count = first_of[g], count_of[g]
         key = pair_key[start]
-        # The old points of this pair: a contiguous run (old keys are sorted).
-        lo = np.searchsorted(old_key, key)
+        # The old points of this pair: a contiguous run (both key lists are sorted).
+        while lo < old_count and old_key[lo] < key:
+            lo += 1
         hi = lo
         while hi < old_count and old_key[hi] == key:
             hi += 1
@@ -143,7 +155,6 @@ def _recall(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_n
             for q in range(lo, hi):          # the last old point with this key, as a dict keeps it
                 if old_feature[q] == feature[k]:
                     found[k] = q
-        unmatched = np.empty(hi - lo, dtype=np.int64)
         left = 0
         for q in range(lo, hi):
             taken = False
@@ -190,23 +201,25 @@ def _separations(position, angle, a, b, nx, ny, centre, start_angle, r_dot_n_a, 
 
 
 @njit(cache=True)
-def _zero_static_velocities(velocity, a, b, dynamic):
-    """The readable step's ``velocity * dynamic`` after a pass, on the bodies in contact."""
-    for k in range(a.shape[0]):
-        for i in (a[k], b[k]):
-            if not dynamic[i]:
-                velocity[i, 0] *= 0.0
-                velocity[i, 1] *= 0.0
-                velocity[i, 2] *= 0.0
+def _zero_static_velocities(velocity, static_members):
+    """The readable step's ``velocity * dynamic`` after a pass, on the static bodies in contact."""
+    for i in static_members:
+        velocity[i, 0] *= 0.0
+        velocity[i, 1] *= 0.0
+        velocity[i, 2] *= 0.0
 
 
 @njit(cache=True)
-def _soft_step(position, angle, velocity, dynamic, turning, half, inverse_mass, inverse_inertia, friction_of,
-               restitution_of, old_key, old_feature, old_x, old_y, old_normal, old_tangent, dt_ratio, h, substeps,
+def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, old_floats, dt_ratio, h, substeps,
                gravity_x, gravity_y, iterations, soft, stiff, relax, max_push, restitution_threshold,
                use_friction, warm_start, match_distance, block_solver, order_kind, margin, corner_rounding,
                incident_rounding):
     n = angle.shape[0]
+    half, inverse_mass, inverse_inertia = bodies[:, 0:2], bodies[:, BODY_INVERSE_MASS], bodies[:, BODY_INVERSE_INERTIA]
+    friction_of, restitution_of = bodies[:, BODY_FRICTION], bodies[:, BODY_RESTITUTION]
+    old_key, old_feature = old_ints[:, POINT_PAIR], old_ints[:, POINT_FEATURE]
+    old_x, old_y = old_floats[:, POINT_X], old_floats[:, POINT_Y]
+    old_normal, old_tangent = old_floats[:, POINT_NORMAL_IMPULSE], old_floats[:, POINT_TANGENT_IMPULSE]
     # 1. Candidate pairs, 2. speculative manifolds of every pair.
     keys = _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding)
     m = keys.shape[0]
@@ -335,6 +348,13 @@ def _soft_step(position, angle, velocity, dynamic, turning, half, inverse_mass, 
         coefficients = stiff if (ima[k] == 0.0 or imb[k] == 0.0) else soft
         bias_rate[r], mass_scale_soft[r], impulse_scale_soft[r] = coefficients[0], coefficients[1], coefficients[2]
     max_normal = np.zeros(p_count)
+    sweep_position = np.empty(p_count, np.int64)       # manifold order -> sweep order
+    for r in range(p_count):
+        sweep_position[order[r]] = r
+    in_contact = np.zeros(n, dtype=np.bool_)
+    for k in range(p_count):
+        in_contact[a[k]] = in_contact[b[k]] = True
+    static_members = np.flatnonzero(in_contact & ~dynamic)
 
     # 4. The sub-steps.
     separation = sep.copy()          # manifold order; the start's for the first biased pass
@@ -351,13 +371,13 @@ def _soft_step(position, angle, velocity, dynamic, turning, half, inverse_mass, 
             if p_count and (biased or relax):
                 if biased:      # warm start: the accumulated impulses (manifold order), A then B
                     for k in range(p_count):
-                        pn, pt = normal_total[k], tangent_total[k]
+                        pn, pt = normal_s[sweep_position[k]], tangent_s[sweep_position[k]]
                         ix, iy = pn * nx[k] + pt * ny[k], pn * ny[k] + pt * (-nx[k])
                         velocity[a[k], 0] += -(ima[k] * ix)
                         velocity[a[k], 1] += -(ima[k] * iy)
                         velocity[a[k], 2] += -(iia[k] * (rax[k] * iy - ray[k] * ix))
                     for k in range(p_count):
-                        pn, pt = normal_total[k], tangent_total[k]
+                        pn, pt = normal_s[sweep_position[k]], tangent_s[sweep_position[k]]
                         ix, iy = pn * nx[k] + pt * ny[k], pn * ny[k] + pt * (-nx[k])
                         velocity[b[k], 0] += imb[k] * ix
                         velocity[b[k], 1] += imb[k] * iy
@@ -378,11 +398,10 @@ def _soft_step(position, angle, velocity, dynamic, turning, half, inverse_mass, 
                 _solve_accumulated(velocity, g_a, g_b, g_nx, g_ny, g_ima, g_imb, g_iia, g_iib, first, row_count, block, k11,
                        k12, k22, s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal, s_mass_tangent, s_mu, lower,
                        iterations, normal_s, tangent_s, target, mass_scale, impulse_scale, False, True, True)
-                for r in range(p_count):
-                    normal_total[order[r]], tangent_total[order[r]] = normal_s[r], tangent_s[r]
-                    if biased:
+                if biased:
+                    for r in range(p_count):
                         max_normal[r] = max(max_normal[r], normal_s[r])
-                _zero_static_velocities(velocity, a, b, dynamic)
+                _zero_static_velocities(velocity, static_members)
             if biased:      # positions between the two passes
                 for i in range(n):
                     if dynamic[i]:
@@ -404,15 +423,22 @@ def _soft_step(position, angle, velocity, dynamic, turning, half, inverse_mass, 
             _solve_accumulated(velocity, g_a, g_b, g_nx, g_ny, g_ima, g_imb, g_iia, g_iib, first, row_count, block, k11, k12,
                    k22, s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal, s_mass_tangent, s_mu, lower, 1, normal_s,
                    tangent_s, target, mass_scale, zeros, False, False, False)
-            for r in range(p_count):
-                normal_total[order[r]], tangent_total[order[r]] = normal_s[r], tangent_s[r]
-            _zero_static_velocities(velocity, a, b, dynamic)
+            _zero_static_velocities(velocity, static_members)
+    for r in range(p_count):
+        normal_total[order[r]], tangent_total[order[r]] = normal_s[r], tangent_s[r]
     block_count = 0
     for q in range(g_count):
         if block[q]:
             block_count += 1
-    return (m, man_pair, man_count, pair_key, feature, px, py, nx, ny, sep, a, b, normal_total, tangent_total,
-            warm_started, block_count)
+    # The points, packed for the caller (they are also the next step's warm-start memory).
+    ints = np.empty((p_count, 4), dtype=np.int64)
+    floats = np.empty((p_count, 7))
+    for k in range(p_count):
+        ints[k, POINT_PAIR], ints[k, POINT_FEATURE], ints[k, POINT_A], ints[k, POINT_B] = pair_key[k], feature[k], a[k], b[k]
+        floats[k, POINT_X], floats[k, POINT_Y], floats[k, POINT_NX], floats[k, POINT_NY] = px[k], py[k], nx[k], ny[k]
+        floats[k, POINT_SEPARATION] = sep[k]
+        floats[k, POINT_NORMAL_IMPULSE], floats[k, POINT_TANGENT_IMPULSE] = normal_total[k], tangent_total[k]
+    return m, g_count, warm_started, block_count, ints, floats
 
 
 #: ``SolverSettings.order`` as the compiled step takes it.
@@ -422,18 +448,16 @@ ORDER_KINDS = {"auto": 0, "manifolds": 1, "colours": 2}
 class CompiledSoftStep:
     """:meth:`World.soft_step` compiled whole, for a world of boxes (module docstring).
 
-    Holds the bodies' constant arrays (half-extents, inverse masses and inertias,
-    friction, restitution) and last step's contact points and impulses (the warm
-    start), in the form the compiled function takes.
+    Holds the bodies' constant array (half-extents, inverse masses and inertias,
+    friction, restitution; columns ``BODY_*``) and the last step's contact points
+    (columns ``POINT_*``), which are also the next step's warm start.
     """
 
     def __init__(self, bodies):
-        self.half = np.array([body.shape.half_extents for body in bodies], dtype=float).reshape(-1, 2)
-        self.inverse_mass = np.array([body.inverse_mass for body in bodies], dtype=float)
-        self.inverse_inertia = np.array([body.inverse_inertia for body in bodies], dtype=float)
-        self.friction = np.array([body.friction for body in bodies], dtype=float)
-        self.restitution = np.array([body.restitution for body in bodies], dtype=float)
+        self.bodies = np.array([[*body.shape.half_extents, body.inverse_mass, body.inverse_inertia, body.friction,
+                                 body.restitution] for body in bodies], dtype=float).reshape(-1, 6)
         self.body_count = len(bodies)
+        self._coefficients_key = None
         self.reset()
 
     @staticmethod
@@ -450,59 +474,64 @@ class CompiledSoftStep:
 
     def reset(self) -> None:
         """Forget last step's impulses."""
-        empty_int, empty = np.zeros(0, dtype=np.int64), np.zeros(0)
-        self.memory = (empty_int, empty_int, empty, empty, empty, empty)
+        self.point_ints, self.point_floats = np.zeros((0, 4), dtype=np.int64), np.zeros((0, 7))
         self.previous_h = None
-        self.last = None
+        self.candidate_pairs = self.manifold_count = self.warm_started = self.block_count = 0
 
     def step(self, state, h: float, substeps: int, gravity, settings) -> None:
         """One step of ``substeps`` sub-steps of ``h`` (s) on ``state`` (updated in place)."""
         solver = settings.solver
-        hertz = min(solver.contact_hertz, 0.25 / h)
-        soft = soft_coefficients(hertz, solver.contact_damping_ratio, h)
-        stiff = soft_coefficients(2.0 * hertz, solver.contact_damping_ratio, h)
+        key = (h, solver.contact_hertz, solver.contact_damping_ratio)
+        if key != self._coefficients_key:
+            hertz = min(solver.contact_hertz, 0.25 / h)
+            self._coefficients = (soft_coefficients(hertz, solver.contact_damping_ratio, h),
+                                  soft_coefficients(2.0 * hertz, solver.contact_damping_ratio, h),
+                                  matmul_rounding()[:2])
+            self._coefficients_key = key
+        (soft, stiff, (corner_rounding, incident_rounding)) = self._coefficients
         dt_ratio = 1.0 if self.previous_h is None else h / self.previous_h
-        corner_rounding, incident_rounding, _ = matmul_rounding()
-        result = _soft_step(state.position, state.angle, state.velocity, state.dynamic, state.turning, self.half,
-                            self.inverse_mass, self.inverse_inertia, self.friction, self.restitution, *self.memory,
-                            float(dt_ratio), float(h), int(substeps), float(gravity[0]), float(gravity[1]),
-                            int(solver.iterations), soft, stiff, bool(solver.relax), float(solver.max_push_velocity),
-                            float(solver.restitution_threshold), bool(solver.friction), bool(solver.warm_starting),
-                            float(solver.warm_start_match_distance), bool(solver.block_solver),
-                            ORDER_KINDS[solver.order], float(SPECULATIVE_MARGIN), corner_rounding, incident_rounding)
-        (self.candidate_pairs, man_pair, man_count, pair_key, feature, px, py, nx, ny, sep, a, b, normal_total,
-         tangent_total, warm_started, block_count) = result
-        self.memory = (pair_key, feature, px, py, normal_total, tangent_total)
+        (self.candidate_pairs, self.manifold_count, self.warm_started, self.block_count, self.point_ints,
+         self.point_floats) = _soft_step(
+            state.position, state.angle, state.velocity, state.dynamic, state.turning, self.bodies, self.point_ints,
+            self.point_floats, float(dt_ratio), float(h), int(substeps), float(gravity[0]), float(gravity[1]),
+            int(solver.iterations), soft, stiff, bool(solver.relax), float(solver.max_push_velocity),
+            float(solver.restitution_threshold), bool(solver.friction), bool(solver.warm_starting),
+            float(solver.warm_start_match_distance), bool(solver.block_solver), ORDER_KINDS[solver.order],
+            SPECULATIVE_MARGIN, corner_rounding, incident_rounding)
         self.previous_h = h
-        self.last = result
-        self.stats = SolverStats(manifolds=len(man_pair), contact_points=len(px),
-                                 total_normal_impulse=float(normal_total.sum()),
-                                 max_penetration=float((-sep).max(initial=0.0)),
-                                 warm_started_points=int(warm_started), block_manifolds=int(block_count))
+
+    @property
+    def stats(self) -> SolverStats:
+        """The last step's :class:`SolverStats`, as the readable soft step fills them."""
+        floats = self.point_floats
+        return SolverStats(manifolds=self.manifold_count, contact_points=len(floats),
+                           total_normal_impulse=float(floats[:, POINT_NORMAL_IMPULSE].sum()),
+                           max_penetration=float((-floats[:, POINT_SEPARATION]).max(initial=0.0)),
+                           warm_started_points=self.warm_started, block_manifolds=self.block_count)
 
     def contacts(self) -> list:
         """The last step's manifolds as ``(i, j, Contact)``, as the readable step gives them."""
-        if self.last is None:
-            return []
-        _, man_pair, man_count, _, feature, px, py, nx, ny, sep, _, _, _, _, _, _ = self.last
-        out, p, n = [], 0, self.body_count
-        for key, count in zip(man_pair.tolist(), man_count.tolist()):
-            depths = np.maximum(-sep[p:p + count], 0.0)
+        ints, floats, n = self.point_ints, self.point_floats, self.body_count
+        out, p = [], 0
+        while p < len(ints):
+            key = int(ints[p, POINT_PAIR])
+            count = 2 if p + 1 < len(ints) and ints[p + 1, POINT_PAIR] == key else 1
+            rows = floats[p:p + count]
+            depths = np.maximum(-rows[:, POINT_SEPARATION], 0.0)
             ids = []
-            for code in feature[p:p + count].tolist():
+            for code in ints[p:p + count, POINT_FEATURE].tolist():
                 ref_face, vertex = divmod(code, 4)
                 ref_face, incident = divmod(ref_face, 4)
                 ref, face = divmod(ref_face, 4)
                 ids.append(("B" if ref else "A", face, incident, vertex))
-            points = np.column_stack([px[p:p + count], py[p:p + count]])
-            out.append((key // n, key % n, Contact((nx[p], ny[p]), depths.max(), points, depths, tuple(ids))))
+            out.append((key // n, key % n, Contact(rows[0, POINT_NX:POINT_NY + 1], depths.max(),
+                                                   rows[:, POINT_X:POINT_Y + 1], depths, tuple(ids))))
             p += count
         return out
 
     def contact_impulses(self) -> list[tuple]:
         """``(i, j, point, normal_impulse, tangent_impulse)`` per contact point of the last step."""
-        if self.last is None:
-            return []
-        _, _, _, _, _, px, py, _, _, _, a, b, normal_total, tangent_total, _, _ = self.last
-        return list(zip(a.tolist(), b.tolist(), zip(px.tolist(), py.tolist()), normal_total.tolist(),
-                        tangent_total.tolist()))
+        ints, floats = self.point_ints, self.point_floats
+        return list(zip(ints[:, POINT_A].tolist(), ints[:, POINT_B].tolist(),
+                        zip(floats[:, POINT_X].tolist(), floats[:, POINT_Y].tolist()),
+                        floats[:, POINT_NORMAL_IMPULSE].tolist(), floats[:, POINT_TANGENT_IMPULSE].tolist()))

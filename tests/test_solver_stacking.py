@@ -153,7 +153,7 @@ def test_ill_conditioned_manifolds_are_solved_point_by_point():
 
 
 # ------------------------------------------------------------------ stacking
-def stack_run(block_solver=True, order="auto", steps=90, name="stack_10", iterations=10):
+def stack_run(block_solver=True, order="manifolds", steps=90, name="stack_10", iterations=10):
     """Largest drift (m) seen and largest |angle| (rad) of a named stack scene."""
     scene = get_scene(name)
     world = scene.build_world(iterations=iterations, block_solver=block_solver, order=order)

@@ -50,7 +50,6 @@ from ..narrowphase.speculative import SPECULATIVE_MARGIN
 from ..shapes import OBB
 from ..solver.constraint_rows import MAX_CONDITION_NUMBER
 from ..solver.kernel_numba import _solve_accumulated
-from .contact_preparation import COLOURS_MIN_MANIFOLDS
 from .soft_step import soft_coefficients
 from .solver_settings import SolverStats
 
@@ -310,7 +309,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
     body_a, body_b = np.empty(g_count, np.int64), np.empty(g_count, np.int64)
     for q in range(g_count):
         body_a[q], body_b[q] = man_pair[q] // n, man_pair[q] % n
-    colours = order_kind == 2 or (order_kind == 0 and g_count >= COLOURS_MIN_MANIFOLDS)
+    colours = order_kind == 1
     manifold_order = _sweep_order(body_a, body_b, movable, colours)
     order = np.empty(p_count, np.int64)
     first = np.empty(g_count, np.int64)
@@ -442,7 +441,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
 
 
 #: ``SolverSettings.order`` as the compiled step takes it.
-ORDER_KINDS = {"auto": 0, "manifolds": 1, "colours": 2}
+ORDER_KINDS = {"manifolds": 0, "colours": 1}
 
 
 class CompiledSoftStep:

@@ -25,12 +25,6 @@ from .solver_settings import SolverSettings, SolverStats
 #: The twins of the solver kernel (:func:`solutions.solver.kernel.kernel`).
 BACKENDS = ("python", "numba")
 
-#: ``order="auto"`` sweeps colour by colour from this many manifolds on (measured:
-#: below it the Python loop over the manifolds in their own order is as fast as the
-#: numpy batches of the colours; pyramid_10 has 145 manifolds, pyramid_20 about 540).
-COLOURS_MIN_MANIFOLDS = 256
-
-
 @dataclass
 class PreparedContacts:
     """The contact points of one step, gathered and pre-computed once (the prestep).
@@ -275,10 +269,7 @@ class ContactPreparation:
         starts = np.cumsum(counts) - counts                      # first point of each manifold
         manifold_a = np.array([local[i] for i, _, _ in manifolds], dtype=int)
         manifold_b = np.array([local[j] for _, j, _ in manifolds], dtype=int)
-        kind = self.settings.order
-        if kind == "auto":
-            kind = "colours" if len(manifolds) >= COLOURS_MIN_MANIFOLDS else "manifolds"
-        manifold_order, _ = sweep_order(manifold_a, manifold_b, movable, kind)
+        manifold_order, _ = sweep_order(manifold_a, manifold_b, movable, self.settings.order)
         count = counts[manifold_order]
         first = np.cumsum(count) - count                         # in sweep order
         order = (np.repeat(starts[manifold_order] - first, count) + np.arange(count.sum())).astype(int)

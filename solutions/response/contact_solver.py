@@ -68,7 +68,7 @@ What ``solve`` does, in order
    and each point's friction follows its normal.  The manifolds are visited in the
    order of :func:`~solutions.solver.sweep_order.sweep_order`: as given
    (``order="manifolds"``: one sweep carries an impulse through a whole stack) or
-   colour by colour (``"colours"``; ``"auto"`` takes them for large scenes).
+   colour by colour (``"colours"``).
    ``backend`` chooses the readable loop or its compiled twin (equal to 1e-12).
 5. ``"split_impulse"`` only: the same sweeps on separate pseudo-velocities that push
    overlapping bodies apart at ``beta / dt * max(depth - slop, 0)``; they move the
@@ -90,12 +90,11 @@ import numpy as np
 from ..body import Body
 from ..contact import Contact
 from ..solver.kernel import kernel
-from .contact_preparation import BACKENDS, COLOURS_MIN_MANIFOLDS, ContactPreparation
+from .contact_preparation import BACKENDS, ContactPreparation
 from .solver_settings import ORDERS, POSITION_CORRECTIONS, SolverSettings, SolverStats
 
 # The settings and figures live in solver_settings.py (the soft step reads them too).
-__all__ = ["ContactSolver", "SolverSettings", "SolverStats", "POSITION_CORRECTIONS", "ORDERS", "BACKENDS",
-           "COLOURS_MIN_MANIFOLDS"]
+__all__ = ["ContactSolver", "SolverSettings", "SolverStats", "POSITION_CORRECTIONS", "ORDERS", "BACKENDS"]
 
 class ContactSolver(ContactPreparation):
     """Sequential-impulse contact solver; the module docstring gives the contract.

@@ -235,8 +235,8 @@ class World:
             return
         shapes = self.world_shapes()
         pairs = self.broad_phase(shapes, margin=SPECULATIVE_MARGIN)
-        self.manifolds, separations = self.speculative_narrow_phase(shapes, pairs)   # once per step
-        self.solver.begin_step(self.bodies, self.manifolds, h, separations)
+        self.manifolds = self.speculative_narrow_phase(shapes, pairs)   # once per step
+        self.solver.begin_step(self.bodies, self.manifolds, h)
         state = self.state
         # Continuous detection once per step, as Box2D v3 does (at the end, from here).
         starts = {k: state.position[k].copy() for k, b in enumerate(self.bodies)
@@ -348,9 +348,10 @@ class World:
         self.stats.max_penetration = max((c.depth for _, _, c in manifolds), default=0.0)
         return manifolds
 
-    def speculative_narrow_phase(self, shapes: list[Shape], pairs) -> tuple[list, list[np.ndarray]]:
+    def speculative_narrow_phase(self, shapes: list[Shape], pairs) -> list[tuple[int, int, Contact]]:
         """Manifolds of the pairs closer than ``SPECULATIVE_MARGIN`` (polygons) or
-        touching (circles), and the signed separation of every point (m, > 0 apart)."""
+        touching (circles); each contact carries the signed separation of its points
+        (``Contact.separations``, m, > 0 apart)."""
         found = [None] * len(pairs)
         # Box-box pairs all at once with numpy (the same answer as the loop below).
         boxes = [k for k, (i, j) in enumerate(pairs) if isinstance(shapes[i], (AABB, OBB))
@@ -367,23 +368,18 @@ class World:
             b = [box_pose(shapes[pairs[k][1]]) for k in boxes]
             batch = box_manifolds(*(np.array(column) for column in zip(*a)),
                                   *(np.array(column) for column in zip(*b)), SPECULATIVE_MARGIN)
-            for k, result in zip(boxes, manifolds_as_contacts(batch)):
-                found[k] = result
+            for k, contact in zip(boxes, manifolds_as_contacts(batch)):
+                found[k] = contact
         for k, (i, j) in enumerate(pairs):
             if isinstance(shapes[i], Circle) or isinstance(shapes[j], Circle):
-                contact = collide(shapes[i], shapes[j])
-                found[k] = None if contact is None else (contact, -contact.depths)
+                found[k] = collide(shapes[i], shapes[j])
             elif k not in batched:
                 found[k] = speculative_polygon_manifold(shapes[i], shapes[j], SPECULATIVE_MARGIN)
-        manifolds, separations = [], []
-        for (i, j), result in zip(pairs, found):
-            if result is not None:
-                manifolds.append((i, j, result[0]))
-                separations.append(result[1])
+        manifolds = [(i, j, contact) for (i, j), contact in zip(pairs, found) if contact is not None]
         self.stats.manifolds = len(manifolds)
         self.stats.contact_points = sum(len(c.points) for _, _, c in manifolds)
         self.stats.max_penetration = max((c.depth for _, _, c in manifolds), default=0.0)
-        return manifolds, separations
+        return manifolds
 
     def sweep_bullets(self, shapes: list[Shape] | None, h: float) -> dict[int, np.ndarray]:
         """Displacements of bullets cut short at their first contact with a static body.

@@ -10,7 +10,11 @@ A :class:`Contact` between shape A and shape B holds
   differ from it by rounding on edges a few nm long);
 - ``feature_ids``: (k,) hashable keys, one per point, naming the features that touch
   (for example reference edge and incident vertex); the same features give the same
-  key on the next step, which is what warm starting matches.  ``None`` when unknown.
+  key on the next step, which is what warm starting matches.  ``None`` when unknown;
+- ``separations``: (k,) signed separation at each point (m, > 0 still apart, <= 0
+  overlapping): the given depths negated before they are clamped at 0, so a
+  speculative point (:mod:`~solutions.narrowphase.speculative`, given a negative
+  depth) keeps how far apart it is while ``depths`` keeps the conventions above.
 
 Moving B by ``depth * normal`` (or A by the opposite) separates the shapes.
 """
@@ -30,26 +34,33 @@ class Contact:
     points: np.ndarray
     depths: np.ndarray | None = None
     feature_ids: tuple | None = None
+    separations: np.ndarray | None = None
 
     def __post_init__(self):
         normal = np.array(self.normal, dtype=float).reshape(2)
         points = np.array(self.points, dtype=float).reshape(-1, 2)
         depth = max(float(self.depth), 0.0)
-        depths = np.full(len(points), depth) if self.depths is None else np.maximum(np.array(self.depths, dtype=float).reshape(-1), 0.0)
-        if len(depths) != len(points):
-            raise ValueError(f"{len(points)} contact points but {len(depths)} depths")
+        given = (np.full(len(points), float(self.depth)) if self.depths is None
+                 else np.array(self.depths, dtype=float).reshape(-1))
+        if len(given) != len(points):
+            raise ValueError(f"{len(points)} contact points but {len(given)} depths")
+        separations = -given if self.separations is None else np.array(self.separations, dtype=float).reshape(-1)
+        if len(separations) != len(points):
+            raise ValueError(f"{len(points)} contact points but {len(separations)} separations")
+        depths = np.maximum(given, 0.0)
         if self.feature_ids is not None and len(self.feature_ids) != len(points):
             raise ValueError(f"{len(points)} contact points but {len(self.feature_ids)} feature ids")
-        for arr in (normal, points, depths):
+        for arr in (normal, points, depths, separations):
             arr.setflags(write=False)
         object.__setattr__(self, "normal", normal)
         object.__setattr__(self, "depth", depth)
         object.__setattr__(self, "points", points)
         object.__setattr__(self, "depths", depths)
+        object.__setattr__(self, "separations", separations)
 
     def flipped(self) -> "Contact":
         """The same contact seen from B: normal negated, depth and points unchanged."""
-        return Contact(0.0 - self.normal, self.depth, self.points, self.depths, self.feature_ids)
+        return Contact(0.0 - self.normal, self.depth, self.points, self.depths, self.feature_ids, self.separations)
 
     def __repr__(self):
         return (f"Contact(normal={np.round(self.normal, 12).tolist()}, depth={self.depth!r}, "

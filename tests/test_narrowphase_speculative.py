@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from solutions.contact import Contact
 from solutions.narrowphase.polygon_polygon import KEEP_POINT_TOL, collide_polygon_polygon
 from solutions.narrowphase.speculative import SPECULATIVE_MARGIN, speculative_polygon_manifold
 from solutions.narrowphase.speculative_batch import (BoxManifolds, manifolds_as_contacts,
@@ -143,7 +144,8 @@ def assert_same_manifold(got, want, scale, where):
     assert (got is None) == (want is None), where
     if want is None:
         return
-    (contact, separations), (want_contact, want_separations) = got, want
+    contact, want_contact = got, want
+    separations, want_separations = contact.separations, want_contact.separations
     assert contact.feature_ids == want_contact.feature_ids, where
     assert all(isinstance(v, int) for fid in contact.feature_ids for v in fid[1:]), where
     atol = RTOL_COORD * scale
@@ -175,7 +177,7 @@ def test_batch_equals_the_scalar_function(margin):
                 assert np.all(np.isnan(result.normal[k])) and result.reference_face[k] == -1, where
                 continue
             ref = "B" if result.reference_is_b[k] else "A"
-            assert want[0].feature_ids == tuple((ref, int(result.reference_face[k]), int(result.incident_face[k]),
+            assert want.feature_ids == tuple((ref, int(result.reference_face[k]), int(result.incident_face[k]),
                                                  int(v)) for v in result.vertex[k, :count]), where
             totals["two" if count == 2 else "one"] += 1
             totals["ref_b"] += ref == "B"
@@ -195,8 +197,8 @@ def test_stacked_boxes_keep_both_corners():
             tilt = math.asin(lift / 2.0)
             b = OBB(corner + rotate(np.array([1.0, 0.5]), 0.3 + tilt), (1.0, 0.5), 0.3 + tilt)
             want = speculative_polygon_manifold(a, b)
-            assert want is not None and len(want[1]) == 2
-            np.testing.assert_allclose(np.sort(want[1]), [0.0, lift], atol=1e-10 * max(1.0, shift))
+            assert want is not None and len(want.separations) == 2
+            np.testing.assert_allclose(np.sort(want.separations), [0.0, lift], atol=1e-10 * max(1.0, shift))
             result = speculative_box_manifolds([a.center], [a.half_extents], [a.angle],
                                                [b.center], [b.half_extents], [b.angle])
             assert_same_manifold(manifolds_as_contacts(result)[0], want, coordinate_scale(a, b), (lift, shift))
@@ -238,8 +240,8 @@ def test_batch_edge_cases_and_bad_input():
 def test_crate_one_centimetre_above_the_floor():
     floor = AABB((-5.0, -1.0), (5.0, 0.0))
     crate = OBB((1.5, 0.51), (0.5, 0.5), 0.0)
-    contact, separations = speculative_polygon_manifold(floor, crate)
-    np.testing.assert_allclose(separations, [0.01, 0.01], atol=1e-15)
+    contact = speculative_polygon_manifold(floor, crate)
+    np.testing.assert_allclose(contact.separations, [0.01, 0.01], atol=1e-15)
     np.testing.assert_allclose(contact.normal, [0.0, 1.0])
     np.testing.assert_allclose(sorted(contact.points.tolist()), [[1.0, 0.005], [2.0, 0.005]], atol=1e-15)
     assert contact.depth == 0.0 and np.all(contact.depths == 0.0)
@@ -264,21 +266,21 @@ def test_moving_b_along_the_normal_adds_to_every_separation():
     for k in range(len(arrays[0])):
         a, b = boxes(arrays, k)
         found = speculative_polygon_manifold(a, b)
-        if found is None or not max(found[1]) < m - 1e-6:
+        if found is None or not max(found.separations) < m - 1e-6:
             continue
-        contact, separations = found
+        contact, separations = found, found.separations
         t = rng.uniform(0.01, 0.99) * (m - max(separations))
         moved = speculative_polygon_manifold(a, OBB(b.center + t * contact.normal, b.half_extents, b.angle))
         checked += 1
         assert moved is not None, (a, b, t)
-        if moved[0].feature_ids != contact.feature_ids:
+        if moved.feature_ids != contact.feature_ids:
             continue   # the 2 % hysteresis of the reference face can hand the role over
         same += 1
         atol = 1e-12 * coordinate_scale(a, b)
-        np.testing.assert_allclose(moved[1], separations + t, rtol=0, atol=atol)
-        np.testing.assert_allclose(moved[0].normal, contact.normal, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(moved.separations, separations + t, rtol=0, atol=atol)
+        np.testing.assert_allclose(moved.normal, contact.normal, rtol=0, atol=1e-15)
         # Each point is the midpoint between the surfaces: it moves by half of t.
-        np.testing.assert_allclose(moved[0].points, contact.points + 0.5 * t * contact.normal, rtol=0, atol=atol)
+        np.testing.assert_allclose(moved.points, contact.points + 0.5 * t * contact.normal, rtol=0, atol=atol)
     assert checked > 300 and same > 0.95 * checked, (checked, same)
 
 
@@ -298,7 +300,7 @@ def test_overlapping_boxes_match_the_contact_manifold():
         overlapping += 1
         found = speculative_polygon_manifold(a, b)
         assert found is not None, (a, b)       # an overlap is always within the margin
-        speculative, separations = found
+        speculative, separations = found, found.separations
         if speculative.feature_ids[0][:2] != contact.feature_ids[0][:2]:
             continue   # collide_polygon_polygon may switch to B's face to keep the deepest vertex
         compared += 1
@@ -315,3 +317,14 @@ def test_overlapping_boxes_match_the_contact_manifold():
         assert all(s > 0.0 for s in extra), (a, b)
         assert speculative.depth == pytest.approx(max(contact.depths), abs=roundoff)
     assert overlapping > 500 and compared > 0.9 * overlapping, (overlapping, compared)
+
+
+def test_a_contact_keeps_the_signed_separations_of_its_points():
+    """Depths are clamped at 0; the separations keep how far apart a point still is."""
+    hovering = Contact((0.0, 1.0), -0.01, [(0.0, 0.0), (1.0, 0.0)], depths=[-0.01, 0.002])
+    assert hovering.depth == 0.0 and hovering.depths.tolist() == [0.0, 0.002]
+    assert hovering.separations.tolist() == [0.01, -0.002]
+    assert hovering.flipped().separations.tolist() == [0.01, -0.002]
+    assert Contact((1.0, 0.0), 0.03, [(0.0, 0.0)]).separations.tolist() == [-0.03]
+    explicit = Contact((1.0, 0.0), 0.0, [(0.0, 0.0)], depths=[0.0], separations=[0.004])
+    assert explicit.separations.tolist() == [0.004] and explicit.depths.tolist() == [0.0]

@@ -276,19 +276,19 @@ def speculative_box_manifolds(centre_a, half_a, angle_a, centre_b, half_b, angle
                         incident_face=np.where(found, j, -1), vertex=vertex)
 
 
-def manifolds_as_contacts(result: BoxManifolds) -> list[tuple[Contact, np.ndarray] | None]:
-    """What the scalar function returns for each pair: ``(Contact, separations)`` or None.
+def manifolds_as_contacts(result: BoxManifolds) -> list[Contact | None]:
+    """What the scalar function returns for each pair: a Contact or None.
 
-    The contact's ``depths`` are ``max(-separations, 0)`` (m), its ``depth`` their
-    maximum and its ``feature_ids`` the tuples ``(ref, face, incident_face, vertex)``
-    described in :class:`BoxManifolds`; ``separations`` is a new (k,) array (m).
+    The contact's ``separations`` are the pair's (m), its ``depths`` ``max(-separations,
+    0)``, its ``depth`` their maximum and its ``feature_ids`` the tuples ``(ref, face,
+    incident_face, vertex)`` described in :class:`BoxManifolds`.
 
     Examples
     --------
     >>> result = speculative_box_manifolds([[0.0, -0.5]], [[5.0, 0.5]], [0.0],
     ...                                    [[0.0, 0.45]], [[0.5, 0.5]], [0.0])
-    >>> (contact, separations), = manifolds_as_contacts(result)
-    >>> round(contact.depth, 12), separations.round(12).tolist(), contact.feature_ids
+    >>> contact, = manifolds_as_contacts(result)
+    >>> round(contact.depth, 12), contact.separations.round(12).tolist(), contact.feature_ids
     (0.05, [-0.05, -0.05], (('A', 2, 0, 0), ('A', 2, 0, 1)))
     """
     # Everything but the Contact objects is computed on the arrays at once.
@@ -297,14 +297,14 @@ def manifolds_as_contacts(result: BoxManifolds) -> list[tuple[Contact, np.ndarra
     names = np.where(result.reference_is_b, "B", "A").tolist()
     faces, incident = result.reference_face.tolist(), result.incident_face.tolist()
     vertices, counts = result.vertex.tolist(), result.count.tolist()
-    out: list[tuple[Contact, np.ndarray] | None] = []
+    out: list[Contact | None] = []
     for k, count in enumerate(counts):
         if count == 0:
             out.append(None)
             continue
         ids = tuple((names[k], faces[k], incident[k], vertex) for vertex in vertices[k][:count])
-        out.append((Contact(result.normal[k], depth[k], result.points[k, :count], all_depths[k, :count], ids),
-                    result.separations[k, :count].copy()))
+        out.append(Contact(result.normal[k], depth[k], result.points[k, :count], all_depths[k, :count], ids,
+                           result.separations[k, :count]))
     return out
 
 

@@ -35,7 +35,7 @@ SPECULATIVE_MARGIN = 0.02
 
 
 def speculative_polygon_manifold(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | ConvexPolygon,
-                                 margin: float = SPECULATIVE_MARGIN) -> tuple[Contact, np.ndarray] | None:
+                                 margin: float = SPECULATIVE_MARGIN) -> Contact | None:
     """Manifold of two polygonal shapes closer than ``margin``, with signed separations.
 
     Parameters
@@ -47,10 +47,10 @@ def speculative_polygon_manifold(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | 
 
     Returns
     -------
-    (Contact, numpy.ndarray) or None
-        The contact (its ``depths`` are the separations' overlaps, clamped at 0, so
-        it follows the :class:`~solutions.contact.Contact` conventions) and the
-        separation of each point (m; ``-depth`` where they overlap).  None when a face
+    Contact or None
+        The contact: its ``separations`` are each point's signed separation (m, > 0
+        apart) and its ``depths`` their overlaps, clamped at 0, as the
+        :class:`~solutions.contact.Contact` conventions ask.  None when a face
         separates the shapes by more than ``margin`` or no point is that close.
 
     Examples
@@ -59,8 +59,8 @@ def speculative_polygon_manifold(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | 
 
     >>> floor = AABB((-5.0, -1.0), (5.0, 0.0))
     >>> crate = OBB((0.0, 0.51), (0.5, 0.5), 0.0)
-    >>> contact, separations = speculative_polygon_manifold(floor, crate)
-    >>> contact.normal.tolist(), contact.depth, separations.round(12).tolist()
+    >>> contact = speculative_polygon_manifold(floor, crate)
+    >>> contact.normal.tolist(), contact.depth, contact.separations.round(12).tolist()
     ([0.0, 1.0], 0.0, [0.01, 0.01])
     >>> speculative_polygon_manifold(floor, crate, margin=0.005) is None
     True
@@ -85,7 +85,6 @@ def speculative_polygon_manifold(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | 
     points, depths, ids = reference_face_manifold(ref_vertices, n, face, *incident, ref_name, scale, margin)
     if not points:
         return None
-    signed = np.array(depths)                    # < 0 for points still apart
+    depths = np.array(depths)                    # < 0 for points still apart: the Contact keeps them as separations
     normal = n if ref_name == "A" else 0.0 - n
-    depths = np.maximum(signed, 0.0)
-    return Contact(normal, float(depths.max()), np.array(points), depths, tuple(ids)), -signed
+    return Contact(normal, max(float(depths.max()), 0.0), np.array(points), depths, tuple(ids))

@@ -108,7 +108,7 @@ class SoftStepSolver(ContactPreparation):
     Calling contract, per step of ``dt`` with ``n`` sub-steps of ``h``, on the
     :class:`~solutions.body_state.BodyState` that the bodies are rows of::
 
-        solver.begin_step(bodies, manifolds, h, separations)
+        solver.begin_step(bodies, manifolds, h)
         for _ in range(n):
             state.integrate_velocities(gravity, h)
             solver.solve_substep(state, h, use_bias=True)     # warm start + soft solve
@@ -140,13 +140,11 @@ class SoftStepSolver(ContactPreparation):
     (True, True)
     """
 
-    def begin_step(self, bodies: list[Body], manifolds: list[tuple[int, int, Contact]], h: float,
-                   separations: list[np.ndarray] | None = None) -> None:
+    def begin_step(self, bodies: list[Body], manifolds: list[tuple[int, int, Contact]], h: float) -> None:
         """Prepare the contacts found at the start of the step for sub-steps of ``h`` (s).
 
-        ``separations``: per manifold, the signed separation of each point (m, > 0 for
-        the speculative points of :mod:`~solutions.narrowphase.speculative`); by
-        default ``-contact.depths``.
+        Each point starts from its contact's signed separation (``Contact.separations``,
+        m, > 0 for the speculative points of :mod:`~solutions.narrowphase.speculative`).
         """
         settings = self.settings
         if not h > 0.0:
@@ -154,10 +152,7 @@ class SoftStepSolver(ContactPreparation):
         if not settings.accumulate_impulses:
             raise ValueError("the soft step needs accumulate_impulses=True (its spring acts on the totals)")
         c = self.prepare(bodies, manifolds, h, block_solver=settings.block_solver)
-        if separations is not None:
-            if [len(s) for s in separations] != [len(contact.points) for _, _, contact in manifolds]:
-                raise ValueError("separations must give one value per contact point of each manifold")
-            c.depth = -np.concatenate(separations) if separations else np.zeros(0)
+        c.depth = -np.concatenate([contact.separations for _, _, contact in manifolds]) if manifolds else np.zeros(0)
         self._contacts = c
         self._rows = np.array(list(c.local), dtype=int)      # world index of each member
         self._start_angle = np.array([float(body.angle) for body in c.members])

@@ -521,7 +521,8 @@ class CompiledSoftStep:
                 ref, face = divmod(ref_face, 4)
                 ids.append(("B" if ref else "A", face, incident, vertex))
             out.append((key // n, key % n, Contact(rows[0, POINT_NX:POINT_NY + 1], depths.max(),
-                                                   rows[:, POINT_X:POINT_Y + 1], depths, tuple(ids))))
+                                                   rows[:, POINT_X:POINT_Y + 1], depths, tuple(ids),
+                                                   rows[:, POINT_SEPARATION])))
             p += count
         return out
 

@@ -61,92 +61,82 @@ def _friction(vxa, vya, wa, vxb, vyb, wb, nx, ny, ima, imb, iia, iib, rt_a, rt_b
     return vxa, vya, wa, vxb, vyb, wb, tangent
 
 
-def _compile_sweeps(accumulate: bool):
-    """The sweeps compiled for one value of ``accumulate``, a constant inside them, so
-    that each version leaves the other's branches out."""
-
-    @njit(cache=True, error_model="numpy")
-    def sweeps(v, a_of, b_of, nx_of, ny_of, ima_of, imb_of, iia_of, iib_of, first_of, count_of, block_of,
-               k11_of, k12_of, k22_of, rn_a, rn_b, rt_a, rt_b, mass_normal, mass_tangent, mu_of, lower_of,
-               iterations, normal, tangent, target, mass_scale, impulse_scale, friction_first, use_friction,
-               use_block):
-        normal_change = np.zeros(normal.shape[0])
-        for _ in range(iterations):
-            for g in range(first_of.shape[0]):
-                a, b, nx, ny = a_of[g], b_of[g], nx_of[g], ny_of[g]
-                ima, imb, iia, iib = ima_of[g], imb_of[g], iia_of[g], iib_of[g]
-                start, stop = first_of[g], first_of[g] + count_of[g]
-                block = use_block and block_of[g]
-                # The two bodies' velocities stay in locals while the group is solved (as
-                # in the readable loop; writing them through memory at every visit made
-                # each row about ten times slower: 75 against 8 ns, measured).
-                vxa, vya, wa, vxb, vyb, wb = v[a, 0], v[a, 1], v[a, 2], v[b, 0], v[b, 1], v[b, 2]
-                if friction_first and use_friction:
-                    for k in range(start, stop):
-                        vxa, vya, wa, vxb, vyb, wb, tangent[k] = _friction(
-                            vxa, vya, wa, vxb, vyb, wb, nx, ny, ima, imb, iia, iib, rt_a[k], rt_b[k],
-                            mass_tangent[k], mu_of[k], normal[k], tangent[k], normal_change[k], accumulate)
-                if block:
-                    k1, k2 = start, start + 1
-                    k11, k12, k22 = k11_of[g], k12_of[g], k22_of[g]
-                    along = (vxb - vxa) * nx + (vyb - vya) * ny
+@njit(cache=True, error_model="numpy")
+def _sweeps(v, a_of, b_of, nx_of, ny_of, ima_of, imb_of, iia_of, iib_of, first_of, count_of, block_of,
+            k11_of, k12_of, k22_of, rn_a, rn_b, rt_a, rt_b, mass_normal, mass_tangent, mu_of, lower_of,
+            iterations, normal, tangent, target, mass_scale, impulse_scale, accumulate,
+            friction_first, use_friction, use_block):
+    """The sweeps of :func:`solutions.solver.kernel.solve_constraints` (module docstring)."""
+    normal_change = np.zeros(normal.shape[0])
+    for _ in range(iterations):
+        for g in range(first_of.shape[0]):
+            a, b, nx, ny = a_of[g], b_of[g], nx_of[g], ny_of[g]
+            ima, imb, iia, iib = ima_of[g], imb_of[g], iia_of[g], iib_of[g]
+            start, stop = first_of[g], first_of[g] + count_of[g]
+            block = use_block and block_of[g]
+            # The two bodies' velocities stay in locals while the group is solved (as
+            # in the readable loop; writing them through memory at every visit made
+            # each row about ten times slower: 75 against 8 ns, measured).
+            vxa, vya, wa, vxb, vyb, wb = v[a, 0], v[a, 1], v[a, 2], v[b, 0], v[b, 1], v[b, 2]
+            if friction_first and use_friction:
+                for k in range(start, stop):
+                    vxa, vya, wa, vxb, vyb, wb, tangent[k] = _friction(
+                        vxa, vya, wa, vxb, vyb, wb, nx, ny, ima, imb, iia, iib, rt_a[k], rt_b[k],
+                        mass_tangent[k], mu_of[k], normal[k], tangent[k], normal_change[k], accumulate)
+            if block:
+                k1, k2 = start, start + 1
+                k11, k12, k22 = k11_of[g], k12_of[g], k22_of[g]
+                along = (vxb - vxa) * nx + (vyb - vya) * ny
+                if accumulate:
+                    old1, old2 = normal[k1], normal[k2]
+                else:
+                    old1, old2 = 0.0, 0.0
+                b1 = along + wb * rn_b[k1] - wa * rn_a[k1] - target[k1] - (k11 * old1 + k12 * old2)
+                b2 = along + wb * rn_b[k2] - wa * rn_a[k2] - target[k2] - (k12 * old1 + k22 * old2)
+                x1, x2 = _block_normal_impulses(k11, k12, k22, b1, b2)
+                if x1 != x1:
+                    x1, x2 = old1, old2
+                else:
+                    x1, x2 = mass_scale[k1] * x1, mass_scale[k2] * x2
+                change1, change2 = x1 - old1, x2 - old2
+                normal[k1] += change1
+                normal[k2] += change2
+                normal_change[k1], normal_change[k2] = change1, change2
+                change = change1 + change2
+                vxa -= ima * change * nx
+                vya -= ima * change * ny
+                wa -= iia * (rn_a[k1] * change1 + rn_a[k2] * change2)
+                vxb += imb * change * nx
+                vyb += imb * change * ny
+                wb += iib * (rn_b[k1] * change1 + rn_b[k2] * change2)
+            else:
+                for k in range(start, stop):
+                    normal_velocity = (vxb - vxa) * nx + (vyb - vya) * ny + wb * rn_b[k] - wa * rn_a[k]
+                    old = normal[k]
+                    change = mass_normal[k] * mass_scale[k] * (target[k] - normal_velocity) - impulse_scale[k] * old
                     if accumulate:
-                        old1, old2 = normal[k1], normal[k2]
+                        normal[k] = max(old + change, lower_of[k])
+                        change = normal[k] - old
                     else:
-                        old1, old2 = 0.0, 0.0
-                    b1 = along + wb * rn_b[k1] - wa * rn_a[k1] - target[k1] - (k11 * old1 + k12 * old2)
-                    b2 = along + wb * rn_b[k2] - wa * rn_a[k2] - target[k2] - (k12 * old1 + k22 * old2)
-                    x1, x2 = _block_normal_impulses(k11, k12, k22, b1, b2)
-                    if x1 != x1:
-                        x1, x2 = old1, old2
-                    else:
-                        x1, x2 = mass_scale[k1] * x1, mass_scale[k2] * x2
-                    change1, change2 = x1 - old1, x2 - old2
-                    normal[k1] += change1
-                    normal[k2] += change2
-                    normal_change[k1], normal_change[k2] = change1, change2
-                    change = change1 + change2
+                        change = max(change, lower_of[k])
+                        normal[k] += change
+                    normal_change[k] = change
                     vxa -= ima * change * nx
                     vya -= ima * change * ny
-                    wa -= iia * (rn_a[k1] * change1 + rn_a[k2] * change2)
+                    wa -= iia * rn_a[k] * change
                     vxb += imb * change * nx
                     vyb += imb * change * ny
-                    wb += iib * (rn_b[k1] * change1 + rn_b[k2] * change2)
-                else:
-                    for k in range(start, stop):
-                        normal_velocity = (vxb - vxa) * nx + (vyb - vya) * ny + wb * rn_b[k] - wa * rn_a[k]
-                        old = normal[k]
-                        change = mass_normal[k] * mass_scale[k] * (target[k] - normal_velocity) - impulse_scale[k] * old
-                        if accumulate:
-                            normal[k] = max(old + change, lower_of[k])
-                            change = normal[k] - old
-                        else:
-                            change = max(change, lower_of[k])
-                            normal[k] += change
-                        normal_change[k] = change
-                        vxa -= ima * change * nx
-                        vya -= ima * change * ny
-                        wa -= iia * rn_a[k] * change
-                        vxb += imb * change * nx
-                        vyb += imb * change * ny
-                        wb += iib * rn_b[k] * change
-                        if not accumulate and not friction_first and use_friction:
-                            vxa, vya, wa, vxb, vyb, wb, tangent[k] = _friction(
-                                vxa, vya, wa, vxb, vyb, wb, nx, ny, ima, imb, iia, iib, rt_a[k], rt_b[k],
-                                mass_tangent[k], mu_of[k], normal[k], tangent[k], normal_change[k], accumulate)
-                if not friction_first and (accumulate or block) and use_friction:
-                    for k in range(start, stop):
+                    wb += iib * rn_b[k] * change
+                    if not accumulate and not friction_first and use_friction:
                         vxa, vya, wa, vxb, vyb, wb, tangent[k] = _friction(
                             vxa, vya, wa, vxb, vyb, wb, nx, ny, ima, imb, iia, iib, rt_a[k], rt_b[k],
                             mass_tangent[k], mu_of[k], normal[k], tangent[k], normal_change[k], accumulate)
-                v[a, 0], v[a, 1], v[a, 2], v[b, 0], v[b, 1], v[b, 2] = vxa, vya, wa, vxb, vyb, wb
-    return sweeps
-
-
-#: The kernel clamping accumulated impulses (every step of the engine) and clamping
-#: each increment (the teaching switch ``accumulate=False``).
-_solve_accumulated = _compile_sweeps(True)
-_solve_clamped = _compile_sweeps(False)
+            if not friction_first and (accumulate or block) and use_friction:
+                for k in range(start, stop):
+                    vxa, vya, wa, vxb, vyb, wb, tangent[k] = _friction(
+                        vxa, vya, wa, vxb, vyb, wb, nx, ny, ima, imb, iia, iib, rt_a[k], rt_b[k],
+                        mass_tangent[k], mu_of[k], normal[k], tangent[k], normal_change[k], accumulate)
+            v[a, 0], v[a, 1], v[a, 2], v[b, 0], v[b, 1], v[b, 2] = vxa, vya, wa, vxb, vyb, wb
 
 
 def solve_constraints(velocity: np.ndarray, rows: ConstraintRows, iterations: int, normal_total: np.ndarray,
@@ -160,8 +150,7 @@ def solve_constraints(velocity: np.ndarray, rows: ConstraintRows, iterations: in
     for name, array in (("velocity", velocity), ("normal_total", normal_total), ("tangent_total", tangent_total)):
         if array.dtype != np.float64 or not array.flags.c_contiguous:
             raise TypeError(f"{name} must be a C-contiguous float64 array (it is updated in place)")
-    solve = _solve_accumulated if accumulate else _solve_clamped
-    solve(velocity, *rows.arrays(), int(iterations), normal_total, tangent_total,
-          np.ascontiguousarray(target, dtype=np.float64), np.ascontiguousarray(mass_scale, dtype=np.float64),
-          np.ascontiguousarray(impulse_scale, dtype=np.float64), bool(friction_first), bool(use_friction),
-          bool(use_block))
+    _sweeps(velocity, *rows.arrays(), int(iterations), normal_total, tangent_total,
+            np.ascontiguousarray(target, dtype=np.float64), np.ascontiguousarray(mass_scale, dtype=np.float64),
+            np.ascontiguousarray(impulse_scale, dtype=np.float64), bool(accumulate), bool(friction_first),
+            bool(use_friction), bool(use_block))

@@ -19,7 +19,7 @@ operations, as one compiled function over the world's
    by feature id or else by the nearest point, the sweep order and the 2x2 blocks);
 4. the sub-steps of :class:`~solutions.response.soft_step.SoftStepSolver` (gravity,
    warm start, soft solve, positions, relax), each pass the compiled solver kernel
-   (:data:`solutions.solver.kernel_numba._solve_accumulated`);
+   (:func:`solutions.solver.kernel_numba._sweeps`, copied in);
 5. restitution, and the impulses remembered for the next step.
 
 It covers a world whose every body is a box (``Body.box``: an OBB centred on the body)
@@ -46,7 +46,7 @@ from ..narrowphase.box_pairs_numba import _box_faces, _manifolds_kernel, matmul_
 from ..narrowphase.speculative import SPECULATIVE_MARGIN
 from ..shapes import OBB
 from ..solver.constraint_rows import MAX_CONDITION_NUMBER
-from ..solver.kernel_numba import _solve_accumulated
+from ..solver.kernel_numba import _sweeps
 from .soft_step import soft_coefficients
 from .solver_settings import SolverStats
 
@@ -180,7 +180,7 @@ def _recall(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_n
             normal_total[k], tangent_total[k] = old_normal[found[k]], old_tangent[found[k]]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _separations(position, angle, a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, r_cross_n_a,
                  r_cross_n_b, depth, cos_less_1, sin, out):
     """``SoftStepSolver.separations``: each point's separation now, in manifold order
@@ -196,7 +196,7 @@ def _separations(position, angle, a, b, nx, ny, centre, start_angle, r_dot_n_a, 
                   - cos_less_1[i] * r_dot_n_a[k] - sin[i] * r_cross_n_a[k] - depth[k])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _zero_static_velocities(velocity, static_members):
     """The readable step's ``velocity * dynamic`` after a pass, on the static bodies in contact."""
     for i in static_members:
@@ -391,9 +391,9 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
                         mass_scale[r], impulse_scale[r] = mass_scale_soft[r], impulse_scale_soft[r]
                     else:
                         target[r], mass_scale[r], impulse_scale[r] = 0.0, 1.0, 0.0
-                _solve_accumulated(velocity, g_a, g_b, g_nx, g_ny, g_ima, g_imb, g_iia, g_iib, first, row_count, block, k11,
+                _sweeps(velocity, g_a, g_b, g_nx, g_ny, g_ima, g_imb, g_iia, g_iib, first, row_count, block, k11,
                        k12, k22, s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal, s_mass_tangent, s_mu, lower,
-                       iterations, normal_s, tangent_s, target, mass_scale, impulse_scale, False, True, True)
+                       iterations, normal_s, tangent_s, target, mass_scale, impulse_scale, True, False, True, True)
                 if biased:
                     for r in range(p_count):
                         max_normal[r] = max(max_normal[r], normal_s[r])
@@ -416,9 +416,9 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
             mass_scale[r] = 1.0 if bounce else 0.0
             bouncing = bouncing or bounce
         if bouncing:
-            _solve_accumulated(velocity, g_a, g_b, g_nx, g_ny, g_ima, g_imb, g_iia, g_iib, first, row_count, block, k11, k12,
+            _sweeps(velocity, g_a, g_b, g_nx, g_ny, g_ima, g_imb, g_iia, g_iib, first, row_count, block, k11, k12,
                    k22, s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal, s_mass_tangent, s_mu, lower, 1, normal_s,
-                   tangent_s, target, mass_scale, zeros, False, False, False)
+                   tangent_s, target, mass_scale, zeros, True, False, False, False)
             _zero_static_velocities(velocity, static_members)
     for r in range(p_count):
         normal_total[order[r]], tangent_total[order[r]] = normal_s[r], tangent_s[r]

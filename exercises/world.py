@@ -41,10 +41,10 @@ from .contact import Contact
 from .joints import DistanceJoint, JointSolver
 from .narrowphase.dispatch import collide
 from .narrowphase.speculative import SPECULATIVE_MARGIN, speculative_polygon_manifold
-from .narrowphase.speculative_batch import box_pose, manifolds_as_contacts, speculative_box_manifolds
 from .response.contact_solver import BACKENDS, ContactSolver, SolverSettings
 from .response.soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, SoftStepSolver, soft_coefficients
 from .shapes import AABB, OBB, Circle, Shape, bounding_aabb
+from .twins import HAS_TWINS, require_twins
 
 #: The soft step computes box-box manifolds with numpy from this many pairs on (the
 #: loop over speculative_polygon_manifold gives the same contacts to rounding).  From
@@ -132,6 +132,8 @@ class WorldSettings:
     def __post_init__(self):
         if self.backend not in BACKENDS:
             raise ValueError(f"backend must be one of {BACKENDS}, got {self.backend!r}")
+        if self.backend == "numba":
+            require_twins("backend='numba'")
         if self.broad_phase not in BROAD_PHASES:
             raise ValueError(f"broad_phase must be one of {BROAD_PHASES}, got {self.broad_phase!r}")
         if int(self.substeps) != self.substeps or self.substeps < 1:
@@ -356,10 +358,12 @@ class World:
         # Box-box pairs all at once with numpy (the same answer as the loop below).
         boxes = [k for k, (i, j) in enumerate(pairs) if isinstance(shapes[i], (AABB, OBB))
                  and isinstance(shapes[j], (AABB, OBB))]
-        if len(boxes) < BATCH_MIN_BOX_PAIRS:
-            boxes = []                     # numpy's fixed cost would exceed the loop's
+        if len(boxes) < BATCH_MIN_BOX_PAIRS or not HAS_TWINS:
+            boxes = []                     # the loop below (the student edition has no batch twin)
         batched = set(boxes)
         if boxes:
+            from .narrowphase.speculative_batch import box_pose, manifolds_as_contacts, speculative_box_manifolds
+
             if self.settings.backend == "numba":   # the numpy version's compiled twin, equal to it
                 from .narrowphase.box_pairs_numba import speculative_box_manifolds_numba as box_manifolds
             else:

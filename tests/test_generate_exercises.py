@@ -367,3 +367,20 @@ def test_no_reference_package_writes_nothing(tmp_path, course, capsys):
     assert "grader check" in capsys.readouterr().err
     assert gen.main(["--source", str(tmp_path / "nowhere"), "--target", str(target), "--force"]) == 2
     assert snapshot(target) == before
+
+
+def test_instructor_only_modules_are_left_out(generated, tmp_path):
+    files, _ = generated
+    marked = [p.relative_to(gen.REPO_ROOT / gen.SOURCE_PACKAGE).as_posix()
+              for p in (gen.REPO_ROOT / gen.SOURCE_PACKAGE).rglob("*.py")
+              if gen.is_instructor_only(p.read_text(encoding="utf-8"))]
+    assert "solver/kernel_numba.py" in marked and "narrowphase/speculative_batch.py" in marked
+    assert not set(marked) & set(files)
+    assert "solver/kernel.py" in files and "twins.py" in files
+    # The marker must start a line: a mention inside a string or a docstring does not count.
+    source = tmp_path / "package"
+    source.mkdir()
+    (source / "twin.py").write_text('"""A twin."""\n### INSTRUCTOR ONLY: computes an answer.\nx = 1\n')
+    (source / "mentions.py").write_text('"""Says ### INSTRUCTOR ONLY inline."""\ny = 2\n')
+    made, _ = gen.generate(source)
+    assert sorted(made) == ["mentions.py"]

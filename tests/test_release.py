@@ -88,6 +88,65 @@ def student_env(student: Path, **extra) -> dict:
     return env
 
 
+def test_the_student_edition_has_no_twins_and_steps_with_the_students_code(release, tmp_path, monkeypatch):
+    """The numpy and numba twins compute what exercises compute: they stay on the
+    instructor's side, and the student's world runs the readable stages, the student's
+    own clipping included."""
+    from tools.generate_exercises import is_instructor_only
+
+    twins = sorted(p.relative_to(REPO / "solutions").as_posix() for p in (REPO / "solutions").rglob("*.py")
+                   if is_instructor_only(p.read_text()))
+    assert {"solver/kernel_numba.py", "narrowphase/box_pairs_numba.py", "narrowphase/speculative_batch.py",
+            "narrowphase/batch_sat.py", "response/soft_step_numba.py"} <= set(twins)
+    student = release.student
+    assert not [t for t in twins if (student / "exercises" / t).exists()]
+    assert not [p for p in student.rglob("*.py") if is_instructor_only(p.read_text(errors="replace"))]
+    script = STUDENT_PRELUDE + textwrap.dedent("""
+        import json
+        from exercises.scenes import get_scene
+        from exercises.world import WorldSettings
+        try:
+            WorldSettings(backend="numba")
+        except ValueError as error:
+            print("REFUSED", error)
+        scene = get_scene("stack_10")
+        world = scene.build_world(scene.recommended_settings())
+        try:
+            for _ in range(30):
+                world.step(scene.dt)
+        except NotImplementedError as error:
+            print("STUB", error)
+        else:
+            print("STATE", json.dumps(world.state.position.tolist()))
+    """)
+    result = subprocess.run([PYTHON, "-S", "-c", script], cwd=student, env=student_env(student),
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert "REFUSED backend='numba' runs the compiled twins of the instructor's edition" in result.stdout
+    assert "STUB write reference_face_manifold()" in result.stdout, result.stdout
+    # A student who wrote the contacts and sequential exercises (here: the reference's
+    # files) steps the stack exactly as the instructor's readable loop does.
+    solved = tmp_path / "solved"
+    shutil.copytree(student / "exercises", solved / "exercises")
+    for done in ("narrowphase/polygon_polygon.py", "solver/contact_point.py"):
+        shutil.copy(REPO / "solutions" / done, solved / "exercises" / done)
+    result = subprocess.run([PYTHON, "-S", "-c", script], cwd=solved, env=student_env(solved),
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert "STATE " in result.stdout, result.stdout
+    got = json.loads(result.stdout.split("STATE ", 1)[1])
+    import solutions.world as world_module
+    from solutions.scenes import get_scene
+
+    monkeypatch.setattr(world_module, "BATCH_MIN_BOX_PAIRS", 10**9)   # the loop, as the student edition runs
+    scene = get_scene("stack_10")
+    world = scene.build_world(scene.recommended_settings())
+    for _ in range(30):
+        world.step(scene.dt)
+    assert got == world.state.position.tolist()
+
+
+
 # Layout -------------------------------------------------------------------------------------
 def test_student_folder_layout(release):
     student = release.student

@@ -1,5 +1,10 @@
 """Generate the student package ``exercises/`` from the reference engine ``solutions/``.
 
+A module holding a line that starts with ``### INSTRUCTOR ONLY`` is left out: the
+numpy and numba twins that compute what an exercise computes (the SAT of boxes, their
+clipping, the solver's impulses) would hand out its answer in another form; the
+student package steps the world with the readable code instead.
+
 Every block between a line ``### BEGIN SOLUTION`` and a line ``### END SOLUTION``
 (nbgrader style, inside a function body, below the docstring) becomes a
 ``raise NotImplementedError("write <function>(), then run `grader check <exercise>`")``
@@ -46,6 +51,7 @@ from pathlib import Path
 from typing import Callable
 
 BEGIN_MARKER = "### BEGIN SOLUTION"
+INSTRUCTOR_ONLY_MARKER = "### INSTRUCTOR ONLY"
 END_MARKER = "### END SOLUTION"
 STUB_LINE = "raise NotImplementedError"
 SOURCE_PACKAGE = "solutions"
@@ -254,6 +260,16 @@ def header(source: str, stubs: list[tuple[str, str | None]] = ()) -> str:
     return "\n".join(lines) + "\n"
 
 
+def is_instructor_only(source: str) -> bool:
+    """Whether a module is kept out of the student package (a line starting with
+    :data:`INSTRUCTOR_ONLY_MARKER`).
+
+    >>> is_instructor_only("'Doc.'\\n### INSTRUCTOR ONLY: a twin.\\nx = 1\\n"), is_instructor_only("x = 1\\n")
+    (True, False)
+    """
+    return any(line.startswith(INSTRUCTOR_ONLY_MARKER) for line in source.splitlines())
+
+
 def generate(source_dir: Path, exercises: dict | None = None) -> tuple[dict[str, str], list[StubbedFunction]]:
     """Every file of the student package, as {relative path: text}, and the stubs made.
 
@@ -271,6 +287,8 @@ def generate(source_dir: Path, exercises: dict | None = None) -> tuple[dict[str,
     for path in sources:
         relative = path.relative_to(source_dir).as_posix()
         text = path.read_text(encoding="utf-8")
+        if is_instructor_only(text):
+            continue
         student, stubbed = strip_solutions(text, f"{SOURCE_PACKAGE}/{relative}",
                                            lambda qualname: exercise_of(relative, qualname, exercises))
         made = [exercise_of(relative, name, exercises) for name in stubbed]

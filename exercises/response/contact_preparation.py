@@ -24,6 +24,7 @@ from ..contact import Contact
 from ..solver.constraint_rows import ConstraintRows, block_is_well_conditioned, normal_block_matrix
 from ..solver.sweep_order import sweep_order
 from .solver_settings import SolverSettings, SolverStats
+from ..twins import require_twins
 
 #: The twins of the solver kernel (:func:`solutions.solver.kernel.kernel`).
 BACKENDS = ("python", "numba")
@@ -103,6 +104,8 @@ class ContactPreparation:
         self.settings = SolverSettings() if settings is None else settings
         if backend not in BACKENDS:
             raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+        if backend == "numba":
+            require_twins("backend='numba'")
         self.backend = backend
         self.stats = SolverStats()
         self.contact_impulses: list[tuple] = []

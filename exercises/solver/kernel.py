@@ -239,6 +239,9 @@ def kernel(backend: str = "python"):
     if backend == "python":
         return solve_constraints
     if backend == "numba":
+        from ..twins import require_twins
+
+        require_twins("backend='numba'")
         from .kernel_numba import solve_constraints as compiled
 
         return compiled

@@ -15,6 +15,8 @@ roundoff of touching may be classified differently from the readable version.
 """
 from __future__ import annotations
 
+### INSTRUCTOR ONLY: not in the student edition (the sat exercise's test for boxes, in numpy form).
+
 import numpy as np
 
 

@@ -34,6 +34,8 @@ code in ``__pycache__``; later processes load it.
 """
 from __future__ import annotations
 
+### INSTRUCTOR ONLY: not in the student edition (the contacts exercise's clipping for boxes, compiled).
+
 import math
 
 import numpy as np

@@ -38,6 +38,8 @@ same way.  Normal from A to B, SI units.
 """
 from __future__ import annotations
 
+### INSTRUCTOR ONLY: not in the student edition (the contacts exercise's clipping for boxes, in numpy form).
+
 import math
 from dataclasses import dataclass
 

@@ -36,6 +36,8 @@ feature id ``(ref, face, incident_face, vertex)`` is stored as the integer
 """
 from __future__ import annotations
 
+### INSTRUCTOR ONLY: not in the student edition (it carries the compiled kernel and box clipping).
+
 import math
 
 import numpy as np

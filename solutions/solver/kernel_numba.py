@@ -8,6 +8,8 @@ is kept between runs (in ``__pycache__``), so only the first run pays for compil
 """
 from __future__ import annotations
 
+### INSTRUCTOR ONLY: not in the student edition (the sequential exercise's impulses, compiled).
+
 import numpy as np
 from numba import njit
 

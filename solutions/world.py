@@ -192,7 +192,7 @@ class World:
             from .response.soft_step_numba import CompiledSoftStep
 
             if CompiledSoftStep.supports(self):
-                self.compiled_soft_step = CompiledSoftStep(self.bodies)
+                self.compiled_soft_step = CompiledSoftStep(self.bodies, self.joints)
         self.stats = StepStats()
         self._static_shapes: dict[int, Shape] = {}
 

@@ -45,11 +45,13 @@ from numba import njit
 
 from ..contact import Contact
 from ..narrowphase.box_pairs_numba import _box_faces, _manifolds_kernel, matmul_rounding
+from ..narrowphase.circle_circle import COINCIDENT_CENTRES_ATOL, COINCIDENT_CENTRES_NORMAL
 from ..narrowphase.speculative import SPECULATIVE_MARGIN
-from ..shapes import OBB
+from ..joints import DistanceJoint
+from ..shapes import OBB, Circle
 from ..solver.constraint_rows import MAX_CONDITION_NUMBER
 from ..solver.kernel_numba import _sweeps
-from .soft_step import soft_coefficients
+from .soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, soft_coefficients
 from .solver_settings import SolverStats
 
 
@@ -63,14 +65,20 @@ POINT_X, POINT_Y, POINT_NX, POINT_NY, POINT_SEPARATION, POINT_NORMAL_IMPULSE, PO
 
 
 @njit(cache=True)
-def _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding):
-    """Pairs ``i < j`` of boxes whose AABBs widened by ``margin / 2`` overlap or touch,
-    not both static, as sorted keys ``i * n + j``."""
+def _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding, circles, jointed):
+    """Pairs ``i < j`` of bodies whose AABBs widened by ``margin / 2`` overlap or touch,
+    not both static and not joined (``jointed``: sorted keys), as sorted keys
+    ``i * n + j``; boxes, or discs of radius ``half[:, 0]`` if ``circles``."""
     n = angle.shape[0]
     aabb = np.empty((n, 4))
     vertices, normals = np.empty((4, 2)), np.empty((4, 2))
     grow = 0.5 * margin
     for i in range(n):
+        if circles:
+            r = half[i, 0]
+            aabb[i, 0], aabb[i, 1] = (position[i, 0] - r) + (-grow), (position[i, 1] - r) + (-grow)
+            aabb[i, 2], aabb[i, 3] = (position[i, 0] + r) + grow, (position[i, 1] + r) + grow
+            continue
         _box_faces(position[i, 0], position[i, 1], half[i, 0], half[i, 1], math.cos(angle[i]),
                    math.sin(angle[i]), corner_rounding, vertices, normals)
         aabb[i, 0] = min(vertices[0, 0], vertices[1, 0], vertices[2, 0], vertices[3, 0]) + (-grow)
@@ -88,11 +96,16 @@ def _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding):
                 break
             if aabb[j, 1] > aabb[i, 3] or aabb[i, 1] > aabb[j, 3] or not (dynamic[i] or dynamic[j]):
                 continue
+            key = min(i, j) * n + max(i, j)
+            if jointed.shape[0]:
+                at = np.searchsorted(jointed, key)
+                if at < jointed.shape[0] and jointed[at] == key:
+                    continue
             if found == keys.shape[0]:
                 grown = np.empty(2 * found, dtype=np.int64)
                 grown[:found] = keys
                 keys = grown
-            keys[found] = min(i, j) * n + max(i, j)
+            keys[found] = key
             found += 1
     return np.sort(keys[:found])
 
@@ -198,6 +211,110 @@ def _separations(position, angle, a, b, nx, ny, centre, start_angle, r_dot_n_a, 
                   - cos_less_1[i] * r_dot_n_a[k] - sin[i] * r_cross_n_a[k] - depth[k])
 
 
+#: The feature id of a disc-disc contact point (``("circle", "circle")``); box ids are 0..127.
+CIRCLE_FEATURE = 1 << 10
+
+
+@njit(cache=True)
+def _circle_manifolds(keys, n, position, radius):
+    """:func:`~solutions.narrowphase.circle_circle.collide_circle_circle` for every pair,
+    laid out as the box manifolds are (one point per pair found)."""
+    m = keys.shape[0]
+    found = np.zeros(m, dtype=np.bool_)
+    count = np.zeros(m, dtype=np.int64)
+    normal, points, separations = np.empty((m, 2)), np.empty((m, 2, 2)), np.empty((m, 2))
+    for k in range(m):
+        i, j = keys[k] // n, keys[k] % n
+        dx, dy = position[j, 0] - position[i, 0], position[j, 1] - position[i, 1]
+        distance = math.hypot(dx, dy)
+        reach = radius[i] + radius[j]
+        if distance > reach:
+            continue
+        if distance <= COINCIDENT_CENTRES_ATOL:
+            ux, uy = COINCIDENT_CENTRES_NORMAL
+        else:
+            ux, uy = dx / distance, dy / distance
+        found[k], count[k] = True, 1
+        normal[k, 0], normal[k, 1] = ux, uy
+        ax, ay = position[i, 0] + radius[i] * ux, position[i, 1] + radius[i] * uy
+        bx, by = position[j, 0] - radius[j] * ux, position[j, 1] - radius[j] * uy
+        points[k, 0, 0], points[k, 0, 1] = (ax + bx) / 2, (ay + by) / 2
+        separations[k, 0] = -(reach - distance)
+    return found, normal, count, points, separations
+
+
+@njit(cache=True)
+def _solve_joints(velocity, position, angle, joint_a, joint_b, anchors, length, frequency, damping, impulses,
+                  inverse_mass, inverse_inertia, h, iterations, use_bias, softness, warm_starting):
+    """:meth:`solutions.joints.JointSolver.solve` of the soft step on arrays: each joint
+    a bilateral row of the kernel (soft rod, or spring), warm started on the biased pass;
+    ``impulses`` (per joint, N s) are read and replaced."""
+    count = joint_a.shape[0]
+    keep = np.zeros(count, dtype=np.bool_)
+    nx, ny, rn_a, rn_b = np.zeros(count), np.zeros(count), np.zeros(count), np.zeros(count)
+    ima, imb, iia, iib = np.zeros(count), np.zeros(count), np.zeros(count), np.zeros(count)
+    mass, target, mass_scale, impulse_scale = np.zeros(count), np.zeros(count), np.zeros(count), np.zeros(count)
+    for k in range(count):
+        a, b = joint_a[k], joint_b[k]
+        ca, sa, cb, sb = math.cos(angle[a]), math.sin(angle[a]), math.cos(angle[b]), math.sin(angle[b])
+        pax = position[a, 0] + ca * anchors[k, 0] - sa * anchors[k, 1]
+        pay = position[a, 1] + sa * anchors[k, 0] + ca * anchors[k, 1]
+        pbx = position[b, 0] + cb * anchors[k, 2] - sb * anchors[k, 3]
+        pby = position[b, 1] + sb * anchors[k, 2] + cb * anchors[k, 3]
+        dx, dy = pbx - pax, pby - pay
+        distance = math.hypot(dx, dy)
+        if distance > 1e-12:
+            ux, uy = dx / distance, dy / distance
+        else:
+            ux, uy = 1.0, 0.0
+        cra = (pax - position[a, 0]) * uy - (pay - position[a, 1]) * ux
+        crb = (pbx - position[b, 0]) * uy - (pby - position[b, 1]) * ux
+        inverse = inverse_mass[a] + inverse_mass[b] + inverse_inertia[a] * cra * cra + inverse_inertia[b] * crb * crb
+        if inverse == 0.0:
+            impulses[k] = 0.0
+            continue
+        error = distance - length[k]
+        if frequency[k] > 0:
+            omega = 2 * math.pi * frequency[k]
+            spring_mass = 1.0 / inverse
+            k_spring, c_damp = spring_mass * omega * omega, 2 * spring_mass * damping[k] * omega
+            gamma = h * (c_damp + h * k_spring)
+            gamma = 1.0 / gamma if gamma > 0 else 0.0
+            target[k] = -error * h * k_spring * gamma
+            mass_scale[k], impulse_scale[k] = inverse / (inverse + gamma), gamma / (inverse + gamma)
+        elif not use_bias:
+            target[k], mass_scale[k], impulse_scale[k] = 0.0, 1.0, 0.0
+        else:
+            target[k], mass_scale[k], impulse_scale[k] = -softness[0] * error, softness[1], softness[2]
+        keep[k] = True
+        nx[k], ny[k], rn_a[k], rn_b[k] = ux, uy, cra, crb
+        ima[k], imb[k], iia[k], iib[k] = inverse_mass[a], inverse_mass[b], inverse_inertia[a], inverse_inertia[b]
+        mass[k] = 1.0 / inverse
+    rows = np.flatnonzero(keep)
+    r = rows.shape[0]
+    if r == 0:
+        return
+    total = np.empty(r)
+    for q in range(r):
+        k = rows[q]
+        total[q] = impulses[k] if (warm_starting or not use_bias) else 0.0
+        if use_bias and total[q] != 0.0:      # warm start: last impulses first, A then B
+            a, b, impulse = joint_a[k], joint_b[k], total[q]
+            velocity[a, 0] -= ima[k] * impulse * nx[k]
+            velocity[a, 1] -= ima[k] * impulse * ny[k]
+            velocity[a, 2] -= iia[k] * rn_a[k] * impulse
+            velocity[b, 0] += imb[k] * impulse * nx[k]
+            velocity[b, 1] += imb[k] * impulse * ny[k]
+            velocity[b, 2] += iib[k] * rn_b[k] * impulse
+    zeros, lower = np.zeros(r), np.full(r, -np.inf)
+    _sweeps(velocity, joint_a[rows], joint_b[rows], nx[rows], ny[rows], ima[rows], imb[rows], iia[rows], iib[rows],
+            np.arange(r), np.ones(r, dtype=np.int64), np.zeros(r, dtype=np.bool_), zeros, zeros, zeros, rn_a[rows],
+            rn_b[rows], zeros, zeros, mass[rows], zeros, zeros, lower, iterations, total, np.zeros(r),
+            target[rows], mass_scale[rows], impulse_scale[rows], True, False, False, False)
+    for q in range(r):
+        impulses[rows[q]] = total[q]
+
+
 @njit(cache=True, inline="always")
 def _zero_static_velocities(velocity, static_members):
     """The readable step's ``velocity * dynamic`` after a pass, on the static bodies in contact."""
@@ -211,7 +328,8 @@ def _zero_static_velocities(velocity, static_members):
 def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, old_floats, dt_ratio, h, substeps,
                gravity_x, gravity_y, iterations, soft, stiff, relax, max_push, restitution_threshold,
                use_friction, warm_start, match_distance, block_solver, order_kind, margin, corner_rounding,
-               incident_rounding):
+               incident_rounding, circles, rotation, jointed, joint_a, joint_b, anchors, length, frequency, damping,
+               joint_impulses, joint_softness):
     n = angle.shape[0]
     half, inverse_mass, inverse_inertia = bodies[:, 0:2], bodies[:, BODY_INVERSE_MASS], bodies[:, BODY_INVERSE_INERTIA]
     friction_of, restitution_of = bodies[:, BODY_FRICTION], bodies[:, BODY_RESTITUTION]
@@ -219,17 +337,24 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
     old_x, old_y = old_floats[:, POINT_X], old_floats[:, POINT_Y]
     old_normal, old_tangent = old_floats[:, POINT_NORMAL_IMPULSE], old_floats[:, POINT_TANGENT_IMPULSE]
     # 1. Candidate pairs, 2. speculative manifolds of every pair.
-    keys = _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding)
+    keys = _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding, circles, jointed)
     m = keys.shape[0]
-    centre_a, centre_b, half_a, half_b = np.empty((m, 2)), np.empty((m, 2)), np.empty((m, 2)), np.empty((m, 2))
-    angle_a, angle_b = np.empty(m), np.empty(m)
-    for k in range(m):
-        i, j = keys[k] // n, keys[k] % n
-        centre_a[k, 0], centre_a[k, 1], half_a[k, 0], half_a[k, 1] = position[i, 0], position[i, 1], half[i, 0], half[i, 1]
-        centre_b[k, 0], centre_b[k, 1], half_b[k, 0], half_b[k, 1] = position[j, 0], position[j, 1], half[j, 0], half[j, 1]
-        angle_a[k], angle_b[k] = angle[i], angle[j]
-    found, normal, count, points, separations, ref_is_b, ref_face, inc_face, vertex = _manifolds_kernel(
-        centre_a, half_a, angle_a, centre_b, half_b, angle_b, margin, corner_rounding, incident_rounding)
+    features = np.full((m, 2), CIRCLE_FEATURE, dtype=np.int64)
+    if circles:
+        found, normal, count, points, separations = _circle_manifolds(keys, n, position, half[:, 0].copy())
+    else:
+        centre_a, centre_b, half_a, half_b = np.empty((m, 2)), np.empty((m, 2)), np.empty((m, 2)), np.empty((m, 2))
+        angle_a, angle_b = np.empty(m), np.empty(m)
+        for k in range(m):
+            i, j = keys[k] // n, keys[k] % n
+            centre_a[k, 0], centre_a[k, 1], half_a[k, 0], half_a[k, 1] = position[i, 0], position[i, 1], half[i, 0], half[i, 1]
+            centre_b[k, 0], centre_b[k, 1], half_b[k, 0], half_b[k, 1] = position[j, 0], position[j, 1], half[j, 0], half[j, 1]
+            angle_a[k], angle_b[k] = angle[i], angle[j]
+        found, normal, count, points, separations, ref_is_b, ref_face, inc_face, vertex = _manifolds_kernel(
+            centre_a, half_a, angle_a, centre_b, half_b, angle_b, margin, corner_rounding, incident_rounding)
+        for k in range(m):
+            for s in range(count[k]):
+                features[k, s] = ((np.int64(ref_is_b[k]) * 4 + ref_face[k]) * 4 + inc_face[k]) * 4 + vertex[k, s]
 
     # The manifolds in pair order and their points in manifold order.
     g_count = 0
@@ -253,12 +378,14 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
             nx[p], ny[p] = normal[k, 0], normal[k, 1]
             px[p], py[p] = points[k, s, 0], points[k, s, 1]
             sep[p] = separations[k, s]
-            feature[p] = ((np.int64(ref_is_b[k]) * 4 + ref_face[k]) * 4 + inc_face[k]) * 4 + vertex[k, s]
+            feature[p] = features[k, s]
             pair_key[p] = keys[k]
             p += 1
         g += 1
 
     # 3. The prestep (ContactPreparation.prepare and SoftStepSolver.begin_step).
+    # Without rotation the contacts see no inertia and no angular velocity.
+    contact_inertia = inverse_inertia if rotation else np.zeros(n)
     centre = position.copy()
     start_angle = angle.copy()
     depth = np.empty(p_count)
@@ -281,13 +408,14 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
         rt_b[k] = -(rbx[k] * nx[k] + rby[k] * ny[k])
         r_dot_n_a[k] = rax[k] * nx[k] + ray[k] * ny[k]
         r_dot_n_b[k] = rbx[k] * nx[k] + rby[k] * ny[k]
-        ima[k], imb[k], iia[k], iib[k] = inverse_mass[i], inverse_mass[j], inverse_inertia[i], inverse_inertia[j]
+        ima[k], imb[k], iia[k], iib[k] = inverse_mass[i], inverse_mass[j], contact_inertia[i], contact_inertia[j]
         k_normal = ima[k] + imb[k] + iia[k] * (rn_a[k] * rn_a[k]) + iib[k] * (rn_b[k] * rn_b[k])
         k_tangent = ima[k] + imb[k] + iia[k] * (rt_a[k] * rt_a[k]) + iib[k] * (rt_b[k] * rt_b[k])
         mass_normal[k] = 1.0 / k_normal if k_normal > 0.0 else 0.0
         mass_tangent[k] = 1.0 / k_tangent if k_tangent > 0.0 else 0.0
+        wi, wj = (velocity[i, 2], velocity[j, 2]) if rotation else (0.0, 0.0)
         normal_velocity[k] = ((velocity[j, 0] - velocity[i, 0]) * nx[k] + (velocity[j, 1] - velocity[i, 1]) * ny[k]
-                              + velocity[j, 2] * rn_b[k] - velocity[i, 2] * rn_a[k])
+                              + wj * rn_b[k] - wi * rn_a[k])
     normal_total, tangent_total = np.zeros(p_count), np.zeros(p_count)
     if warm_start:
         _recall(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_normal, old_tangent,
@@ -304,7 +432,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
     # The rows in sweep order (ContactPreparation._sweep_rows).
     movable = np.empty(n, dtype=np.bool_)
     for i in range(n):
-        movable[i] = inverse_mass[i] + inverse_inertia[i] > 0.0
+        movable[i] = inverse_mass[i] + contact_inertia[i] > 0.0
     body_a, body_b = np.empty(g_count, np.int64), np.empty(g_count, np.int64)
     for q in range(g_count):
         body_a[q], body_b[q] = man_pair[q] // n, man_pair[q] % n
@@ -400,6 +528,10 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
                     for r in range(p_count):
                         max_normal[r] = max(max_normal[r], normal_s[r])
                 _zero_static_velocities(velocity, static_members)
+            if biased and joint_a.shape[0]:     # the joints: soft rods after the contacts
+                _solve_joints(velocity, position, angle, joint_a, joint_b, anchors, length, frequency, damping,
+                              joint_impulses, inverse_mass, inverse_inertia, h, iterations, True, joint_softness,
+                              warm_start)
             if biased:      # positions between the two passes
                 for i in range(n):
                     if dynamic[i]:
@@ -407,6 +539,10 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
                         position[i, 1] += h * velocity[i, 1]
                     if turning[i]:
                         angle[i] += h * velocity[i, 2]
+                if relax and joint_a.shape[0]:
+                    _solve_joints(velocity, position, angle, joint_a, joint_b, anchors, length, frequency, damping,
+                                  joint_impulses, inverse_mass, inverse_inertia, h, iterations, False,
+                                  joint_softness, warm_start)
 
     # 5. Restitution (SoftStepSolver.end_step).
     if p_count:
@@ -444,35 +580,48 @@ ORDER_KINDS = {"manifolds": 0, "colours": 1}
 
 
 class CompiledSoftStep:
-    """:meth:`World.soft_step` compiled whole, for a world of boxes (module docstring).
+    """:meth:`World.soft_step` compiled whole, for a world of boxes or of discs (module docstring).
 
-    Holds the bodies' constant array (half-extents, inverse masses and inertias,
-    friction, restitution; columns ``BODY_*``) and the last step's contact points
-    (columns ``POINT_*``), which are also the next step's warm start.
+    Holds the bodies' constant array (half-extents or radius, inverse masses and
+    inertias, friction, restitution; columns ``BODY_*``), the joints as arrays with
+    their last impulses, and the last step's contact points (columns ``POINT_*``),
+    which are also the next step's warm start.
     """
 
-    def __init__(self, bodies):
-        self.bodies = np.array([[*body.shape.half_extents, body.inverse_mass, body.inverse_inertia, body.friction,
-                                 body.restitution] for body in bodies], dtype=float).reshape(-1, 6)
-        self.body_count = len(bodies)
+    def __init__(self, bodies, joints=()):
+        self.circles = bool(bodies) and isinstance(bodies[0].shape, Circle)
+        size = [[body.shape.radius, 0.0] if self.circles else list(body.shape.half_extents) for body in bodies]
+        self.bodies = np.array([[*half, body.inverse_mass, body.inverse_inertia, body.friction, body.restitution]
+                                for half, body in zip(size, bodies)], dtype=float).reshape(-1, 6)
+        self.body_count = n = len(bodies)
+        self.joint_a = np.array([joint.a for joint in joints], dtype=np.int64)
+        self.joint_b = np.array([joint.b for joint in joints], dtype=np.int64)
+        self.anchors = np.array([[*joint.anchor_a, *joint.anchor_b] for joint in joints], dtype=float).reshape(-1, 4)
+        self.joint_length, self.joint_frequency, self.joint_damping = (
+            np.array([getattr(joint, name) for joint in joints], dtype=float)
+            for name in ("length", "frequency", "damping_ratio"))
+        self.jointed = np.unique(np.array([min(j.a, j.b) * n + max(j.a, j.b) for j in joints], dtype=np.int64))
         self._coefficients_key = None
         self.reset()
 
     @staticmethod
     def supports(world) -> bool:
         """Whether this twin can step ``world``: every body a ``Body.box`` (an OBB centred
-        on it), no joints, no bullet under continuous detection, rotation and
-        accumulated impulses on."""
+        on it) or every body a ``Body.circle`` (a disc centred on it), joints distance
+        joints, no bullet under continuous detection, accumulated impulses on."""
         settings = world.settings
-        return (settings.soft_step and settings.backend == "numba" and not world.joints
-                and settings.solver.rotation and settings.solver.accumulate_impulses
-                and not (settings.continuous and any(b.is_bullet and not b.is_static for b in world.bodies))
-                and all(isinstance(b.shape, OBB) and not b.shape.center.any() and b.shape.angle == 0.0
-                        for b in world.bodies))
+        bodies = world.bodies
+        boxes = all(isinstance(b.shape, OBB) and not b.shape.center.any() and b.shape.angle == 0.0 for b in bodies)
+        discs = all(isinstance(b.shape, Circle) and not b.shape.center.any() for b in bodies)
+        return (settings.soft_step and settings.backend == "numba" and settings.solver.accumulate_impulses
+                and all(isinstance(joint, DistanceJoint) for joint in world.joints)
+                and not (settings.continuous and any(b.is_bullet and not b.is_static for b in bodies))
+                and (boxes or discs))
 
     def reset(self) -> None:
         """Forget last step's impulses."""
         self.point_ints, self.point_floats = np.zeros((0, 4), dtype=np.int64), np.zeros((0, 7))
+        self.joint_impulses = np.zeros(len(self.joint_a))
         self.previous_h = None
         self.candidate_pairs = self.manifold_count = self.warm_started = self.block_count = 0
 
@@ -484,9 +633,10 @@ class CompiledSoftStep:
             hertz = min(solver.contact_hertz, 0.25 / h)
             self._coefficients = (soft_coefficients(hertz, solver.contact_damping_ratio, h),
                                   soft_coefficients(2.0 * hertz, solver.contact_damping_ratio, h),
+                                  soft_coefficients(min(JOINT_HERTZ, 0.25 / h), JOINT_DAMPING_RATIO, h),
                                   matmul_rounding()[:2])
             self._coefficients_key = key
-        (soft, stiff, (corner_rounding, incident_rounding)) = self._coefficients
+        (soft, stiff, joint_softness, (corner_rounding, incident_rounding)) = self._coefficients
         dt_ratio = 1.0 if self.previous_h is None else h / self.previous_h
         (self.candidate_pairs, self.manifold_count, self.warm_started, self.block_count, self.point_ints,
          self.point_floats) = _soft_step(
@@ -495,7 +645,9 @@ class CompiledSoftStep:
             int(solver.iterations), soft, stiff, bool(solver.relax), float(solver.max_push_velocity),
             float(solver.restitution_threshold), bool(solver.friction), bool(solver.warm_starting),
             float(solver.warm_start_match_distance), bool(solver.block_solver), ORDER_KINDS[solver.order],
-            SPECULATIVE_MARGIN, corner_rounding, incident_rounding)
+            SPECULATIVE_MARGIN, corner_rounding, incident_rounding, self.circles, bool(solver.rotation),
+            self.jointed, self.joint_a, self.joint_b, self.anchors, self.joint_length, self.joint_frequency,
+            self.joint_damping, self.joint_impulses, joint_softness)
         self.previous_h = h
 
     @property
@@ -518,6 +670,9 @@ class CompiledSoftStep:
             depths = np.maximum(-rows[:, POINT_SEPARATION], 0.0)
             ids = []
             for code in ints[p:p + count, POINT_FEATURE].tolist():
+                if code == CIRCLE_FEATURE:
+                    ids.append(("circle", "circle"))
+                    continue
                 ref_face, vertex = divmod(code, 4)
                 ref_face, incident = divmod(ref_face, 4)
                 ref, face = divmod(ref_face, 4)

@@ -244,17 +244,35 @@ def _circle_manifolds(keys, n, position, radius):
 
 
 @njit(cache=True)
+def _joint_rows(count):
+    """Work space of :func:`_solve_joints` for ``count`` joints, made once per step:
+    per row ``a, b, nx, ny, rn_a, rn_b, ima, imb, iia, iib, mass, target, mass_scale,
+    impulse_scale, total, joint``, then the kernel's constant columns (first row of each
+    group, one row per group, no block, zeros, no lower bound)."""
+    int_rows = np.zeros((3, count), dtype=np.int64)
+    float_rows = np.zeros((13, count))
+    first = np.arange(count)
+    ones = np.ones(count, dtype=np.int64)
+    no_block = np.zeros(count, dtype=np.bool_)
+    zeros = np.zeros(count)
+    lower = np.full(count, -np.inf)
+    return int_rows, float_rows, first, ones, no_block, zeros, lower
+
+
+@njit(cache=True)
 def _solve_joints(velocity, position, angle, joint_a, joint_b, anchors, length, frequency, damping, impulses,
-                  inverse_mass, inverse_inertia, h, iterations, use_bias, softness, warm_starting):
+                  inverse_mass, inverse_inertia, h, iterations, use_bias, softness, warm_starting, work):
     """:meth:`solutions.joints.JointSolver.solve` of the soft step on arrays: each joint
     a bilateral row of the kernel (soft rod, or spring), warm started on the biased pass;
-    ``impulses`` (per joint, N s) are read and replaced."""
-    count = joint_a.shape[0]
-    keep = np.zeros(count, dtype=np.bool_)
-    nx, ny, rn_a, rn_b = np.zeros(count), np.zeros(count), np.zeros(count), np.zeros(count)
-    ima, imb, iia, iib = np.zeros(count), np.zeros(count), np.zeros(count), np.zeros(count)
-    mass, target, mass_scale, impulse_scale = np.zeros(count), np.zeros(count), np.zeros(count), np.zeros(count)
-    for k in range(count):
+    ``impulses`` (per joint, N s) are read and replaced; ``work`` from :func:`_joint_rows`."""
+    int_rows, float_rows, first, ones, no_block, zeros, lower = work
+    a_of, b_of, joint_of = int_rows[0], int_rows[1], int_rows[2]
+    nx, ny, rn_a, rn_b = float_rows[0], float_rows[1], float_rows[2], float_rows[3]
+    ima, imb, iia, iib = float_rows[4], float_rows[5], float_rows[6], float_rows[7]
+    mass, target, mass_scale, impulse_scale, total = (float_rows[8], float_rows[9], float_rows[10],
+                                                      float_rows[11], float_rows[12])
+    r = 0
+    for k in range(joint_a.shape[0]):
         a, b = joint_a[k], joint_b[k]
         ca, sa, cb, sb = math.cos(angle[a]), math.sin(angle[a]), math.cos(angle[b]), math.sin(angle[b])
         pax = position[a, 0] + ca * anchors[k, 0] - sa * anchors[k, 1]
@@ -270,7 +288,7 @@ def _solve_joints(velocity, position, angle, joint_a, joint_b, anchors, length, 
         cra = (pax - position[a, 0]) * uy - (pay - position[a, 1]) * ux
         crb = (pbx - position[b, 0]) * uy - (pby - position[b, 1]) * ux
         inverse = inverse_mass[a] + inverse_mass[b] + inverse_inertia[a] * cra * cra + inverse_inertia[b] * crb * crb
-        if inverse == 0.0:
+        if inverse == 0.0:          # two static bodies: no row, and no impulse to remember
             impulses[k] = 0.0
             continue
         error = distance - length[k]
@@ -280,39 +298,38 @@ def _solve_joints(velocity, position, angle, joint_a, joint_b, anchors, length, 
             k_spring, c_damp = spring_mass * omega * omega, 2 * spring_mass * damping[k] * omega
             gamma = h * (c_damp + h * k_spring)
             gamma = 1.0 / gamma if gamma > 0 else 0.0
-            target[k] = -error * h * k_spring * gamma
-            mass_scale[k], impulse_scale[k] = inverse / (inverse + gamma), gamma / (inverse + gamma)
+            target[r] = -error * h * k_spring * gamma
+            mass_scale[r], impulse_scale[r] = inverse / (inverse + gamma), gamma / (inverse + gamma)
         elif not use_bias:
-            target[k], mass_scale[k], impulse_scale[k] = 0.0, 1.0, 0.0
+            target[r], mass_scale[r], impulse_scale[r] = 0.0, 1.0, 0.0
         else:
-            target[k], mass_scale[k], impulse_scale[k] = -softness[0] * error, softness[1], softness[2]
-        keep[k] = True
-        nx[k], ny[k], rn_a[k], rn_b[k] = ux, uy, cra, crb
-        ima[k], imb[k], iia[k], iib[k] = inverse_mass[a], inverse_mass[b], inverse_inertia[a], inverse_inertia[b]
-        mass[k] = 1.0 / inverse
-    rows = np.flatnonzero(keep)
-    r = rows.shape[0]
+            target[r], mass_scale[r], impulse_scale[r] = -softness[0] * error, softness[1], softness[2]
+        a_of[r], b_of[r], joint_of[r] = a, b, k
+        nx[r], ny[r], rn_a[r], rn_b[r] = ux, uy, cra, crb
+        ima[r], imb[r], iia[r], iib[r] = inverse_mass[a], inverse_mass[b], inverse_inertia[a], inverse_inertia[b]
+        mass[r] = 1.0 / inverse
+        total[r] = impulses[k] if (warm_starting or not use_bias) else 0.0
+        r += 1
     if r == 0:
         return
-    total = np.empty(r)
+    if use_bias:        # warm start: last impulses first, A then B
+        for q in range(r):
+            impulse = total[q]
+            if impulse != 0.0:
+                a, b = a_of[q], b_of[q]
+                velocity[a, 0] -= ima[q] * impulse * nx[q]
+                velocity[a, 1] -= ima[q] * impulse * ny[q]
+                velocity[a, 2] -= iia[q] * rn_a[q] * impulse
+                velocity[b, 0] += imb[q] * impulse * nx[q]
+                velocity[b, 1] += imb[q] * impulse * ny[q]
+                velocity[b, 2] += iib[q] * rn_b[q] * impulse
+    zero = zeros[:r]
+    _sweeps(velocity, a_of[:r], b_of[:r], nx[:r], ny[:r], ima[:r], imb[:r], iia[:r], iib[:r], first[:r], ones[:r],
+            no_block[:r], zero, zero, zero, rn_a[:r], rn_b[:r], zero, zero, mass[:r], zero, zero, lower[:r],
+            iterations, total[:r], zeros[:r].copy(), target[:r], mass_scale[:r], impulse_scale[:r], True, False,
+            False, False)
     for q in range(r):
-        k = rows[q]
-        total[q] = impulses[k] if (warm_starting or not use_bias) else 0.0
-        if use_bias and total[q] != 0.0:      # warm start: last impulses first, A then B
-            a, b, impulse = joint_a[k], joint_b[k], total[q]
-            velocity[a, 0] -= ima[k] * impulse * nx[k]
-            velocity[a, 1] -= ima[k] * impulse * ny[k]
-            velocity[a, 2] -= iia[k] * rn_a[k] * impulse
-            velocity[b, 0] += imb[k] * impulse * nx[k]
-            velocity[b, 1] += imb[k] * impulse * ny[k]
-            velocity[b, 2] += iib[k] * rn_b[k] * impulse
-    zeros, lower = np.zeros(r), np.full(r, -np.inf)
-    _sweeps(velocity, joint_a[rows], joint_b[rows], nx[rows], ny[rows], ima[rows], imb[rows], iia[rows], iib[rows],
-            np.arange(r), np.ones(r, dtype=np.int64), np.zeros(r, dtype=np.bool_), zeros, zeros, zeros, rn_a[rows],
-            rn_b[rows], zeros, zeros, mass[rows], zeros, zeros, lower, iterations, total, np.zeros(r),
-            target[rows], mass_scale[rows], impulse_scale[rows], True, False, False, False)
-    for q in range(r):
-        impulses[rows[q]] = total[q]
+        impulses[joint_of[q]] = total[q]
 
 
 @njit(cache=True, inline="always")
@@ -488,6 +505,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
     target, mass_scale, impulse_scale = np.empty(p_count), np.empty(p_count), np.empty(p_count)
     zeros = np.zeros(p_count)
     body_cos_less_1, body_sin = np.empty(n), np.empty(n)
+    joint_work = _joint_rows(joint_a.shape[0])
     for _ in range(substeps):
         for i in range(n):
             if dynamic[i]:
@@ -531,7 +549,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
             if biased and joint_a.shape[0]:     # the joints: soft rods after the contacts
                 _solve_joints(velocity, position, angle, joint_a, joint_b, anchors, length, frequency, damping,
                               joint_impulses, inverse_mass, inverse_inertia, h, iterations, True, joint_softness,
-                              warm_start)
+                              warm_start, joint_work)
             if biased:      # positions between the two passes
                 for i in range(n):
                     if dynamic[i]:
@@ -542,7 +560,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
                 if relax and joint_a.shape[0]:
                     _solve_joints(velocity, position, angle, joint_a, joint_b, anchors, length, frequency, damping,
                                   joint_impulses, inverse_mass, inverse_inertia, h, iterations, False,
-                                  joint_softness, warm_start)
+                                  joint_softness, warm_start, joint_work)
 
     # 5. Restitution (SoftStepSolver.end_step).
     if p_count:

@@ -28,6 +28,7 @@ from .body import Body
 from .joints import DistanceJoint
 from .shapes import polygon_centroid
 from .response.contact_solver import SolverSettings
+from .response.solver_settings import SoftStepSettings, split_overrides
 from .world import World, WorldSettings
 
 KMH = 1000.0 / 3600.0  # m/s per km/h
@@ -52,10 +53,13 @@ class Scene:
     recommended: dict = field(default_factory=dict)
 
     def world_settings(self, **solver_overrides) -> WorldSettings:
-        """World switches for this scene: only what it needs, then ``solver_overrides``."""
+        """World switches for this scene: only what it needs, then ``solver_overrides``
+        (settings of :class:`SolverSettings` or of :class:`SoftStepSettings`, by name)."""
+        solver_changes, soft_changes = split_overrides(solver_overrides)
         solver = replace(self.solver, rotation=self.needs_rotation, friction=self.needs_friction)
-        solver = replace(solver, **solver_overrides)
-        return WorldSettings(gravity=self.gravity, continuous=self.needs_continuous, solver=solver)
+        solver = replace(solver, **solver_changes)
+        return WorldSettings(gravity=self.gravity, continuous=self.needs_continuous, solver=solver,
+                             soft=SoftStepSettings(**soft_changes))
 
     def build_world(self, settings: WorldSettings | None = None, **solver_overrides) -> World:
         """A new :class:`World` of this scene's bodies."""

@@ -15,8 +15,9 @@
 With ``soft_step`` the contacts are found once per step and each sub-step solves soft
 contacts and relaxes them instead (:mod:`solutions.response.soft_step`, Box2D v3).
 
-Every technique is a switch of :class:`WorldSettings` or of the solver's
-:class:`~solutions.response.contact_solver.SolverSettings`, so a learner can turn one
+Every technique is a switch of :class:`WorldSettings`, of the solvers'
+:class:`~solutions.response.solver_settings.SolverSettings` or of the soft step's
+:class:`~solutions.response.solver_settings.SoftStepSettings`, so a learner can turn one
 off and watch what changes.  A scene (:mod:`solutions.scenes`) sets only what it needs.
 Units: SI; ``gravity`` in m/s^2, ``dt`` in s.
 """
@@ -40,6 +41,7 @@ from .joints import DistanceJoint, JointSolver
 from .narrowphase.dispatch import collide
 from .narrowphase.speculative import SPECULATIVE_MARGIN, speculative_polygon_manifold
 from .response.contact_solver import BACKENDS, ContactSolver, SolverSettings
+from .response.solver_settings import SoftStepSettings
 from .response.soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, SoftStepSolver, soft_coefficients
 from .shapes import AABB, OBB, Circle, Shape, bounding_aabb
 from .twins import HAS_TWINS, require_twins
@@ -108,7 +110,9 @@ class WorldSettings:
         Step as Box2D v3 does (:mod:`~solutions.response.soft_step`): soft contacts
         and relaxation inside the sub-steps, instead of ``solver.position_correction``.
     solver : SolverSettings
-        Switches of the contact solver.
+        Switches of the contact solvers (both steps).
+    soft : SoftStepSettings
+        The soft step's own settings: its contact springs and relax pass.
     backend : str
         ``"python"``: every stage in readable Python and numpy (the teaching text);
         ``"numba"``: the compiled twins of the solver kernel (contacts and joints,
@@ -125,6 +129,7 @@ class WorldSettings:
     substeps: int = 1
     soft_step: bool = False
     solver: SolverSettings = field(default_factory=SolverSettings)
+    soft: SoftStepSettings = field(default_factory=SoftStepSettings)
     backend: str = "python"
 
     def __post_init__(self):
@@ -179,7 +184,10 @@ class World:
         # Bodies joined by a joint do not collide with each other (Box2D's collideConnected = false).
         self._jointed = {(min(j.a, j.b), max(j.a, j.b)) for j in self.joints}
         backend = self.settings.backend
-        self.solver = (SoftStepSolver if self.settings.soft_step else ContactSolver)(self.settings.solver, backend)
+        if self.settings.soft_step:
+            self.solver = SoftStepSolver(self.settings.solver, self.settings.soft, backend)
+        else:
+            self.solver = ContactSolver(self.settings.solver, backend)
         self.joint_solver = JointSolver(self.settings.solver.iterations, self.settings.solver.baumgarte,
                                         self.settings.solver.warm_starting, backend)
         self.time = 0.0
@@ -249,7 +257,7 @@ class World:
             if self.joints:   # the joint solver works on the bodies, which are rows of the state
                 self.joint_solver.solve(self.bodies, self.joints, h, softness=joint_softness)
             state.integrate_positions(h)
-            if self.joints and self.settings.solver.relax:
+            if self.joints and self.settings.soft.relax:
                 self.joint_solver.solve(self.bodies, self.joints, h, use_bias=False)
             self.solver.solve_substep(state, h, use_bias=False)
             self.time += h

@@ -18,6 +18,7 @@ from solutions.body import Body
 from solutions.contact import Contact
 from solutions.narrowphase.speculative import speculative_polygon_manifold
 from solutions.response.contact_solver import SolverSettings
+from solutions.response.solver_settings import SoftStepSettings, split_overrides
 from solutions.body_state import BodyState
 from solutions.response.soft_step import SoftStepSolver, soft_coefficients
 from solutions.solver import kernel_numba
@@ -30,9 +31,11 @@ G = 9.81
 DT = 1 / 60
 
 
-def soft_world(bodies, substeps=8, **solver):
-    solver.setdefault("iterations", 1)
-    return World(bodies, WorldSettings(soft_step=True, substeps=substeps, solver=SolverSettings(**solver)))
+def soft_world(bodies, substeps=8, **settings):
+    settings.setdefault("iterations", 1)
+    solver, soft = split_overrides(settings)
+    return World(bodies, WorldSettings(soft_step=True, substeps=substeps, solver=SolverSettings(**solver),
+                                       soft=SoftStepSettings(**soft)))
 
 
 def scene_world(name, **overrides):
@@ -42,6 +45,8 @@ def scene_world(name, **overrides):
     for key, value in overrides.items():
         if hasattr(settings.solver, key):
             setattr(settings.solver, key, value)
+        elif hasattr(settings.soft, key):
+            setattr(settings.soft, key, value)
         else:
             setattr(settings, key, value)
     return scene, scene.build_world(settings)
@@ -220,8 +225,11 @@ def test_bad_input_is_refused():
     with pytest.raises(ValueError, match="h must be > 0"):
         SoftStepSolver().begin_step([ground_body, box], [(0, 1, touching)], 0.0)
     for bad in (dict(contact_hertz=-1.0), dict(contact_damping_ratio=-0.5), dict(max_push_velocity=-1.0)):
+        solver, soft = split_overrides(bad)
         with pytest.raises(ValueError, match=next(iter(bad))):
-            SolverSettings(**bad)
+            SolverSettings(**solver) if solver else SoftStepSettings(**soft)
+    with pytest.raises(TypeError, match="unknown solver setting.* relaxx"):
+        get_scene("stack_10").world_settings(relaxx=False)
     with pytest.raises(ValueError, match="margin"):
         speculative_polygon_manifold(ground_body.world_shape(), box.world_shape(), margin=-0.01)
 

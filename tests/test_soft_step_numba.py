@@ -13,6 +13,7 @@ import pytest
 from solutions.body import Body
 from solutions.joints import DistanceJoint
 from solutions.response.contact_solver import SolverSettings
+from solutions.response.solver_settings import SoftStepSettings, split_overrides
 from solutions.scenes import SCENES, get_scene, ground
 from solutions.world import World, WorldSettings
 
@@ -59,7 +60,9 @@ def pair(bodies_of, settings: WorldSettings) -> tuple[World, World]:
 @pytest.mark.parametrize("switches", SWITCHES, ids=lambda s: ",".join(f"{k}={v}" for k, v in s.items()) or "default")
 @pytest.mark.parametrize("seed", range(2))
 def test_the_compiled_soft_step_moves_random_piles_as_the_readable_one(seed, switches):
-    settings = WorldSettings(soft_step=True, substeps=1 + seed * 3, solver=SolverSettings(**switches))
+    solver, soft = split_overrides(switches)
+    settings = WorldSettings(soft_step=True, substeps=1 + seed * 3, solver=SolverSettings(**solver),
+                             soft=SoftStepSettings(**soft))
     readable, compiled = pair(lambda: box_pile(seed), settings)
     assert_same_motion(readable, compiled, 1.0, 1 / 60)
     assert readable.stats.manifolds > 5

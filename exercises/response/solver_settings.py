@@ -1,8 +1,10 @@
 # Library file of the collision course (you do not need to edit it).
 # Handed out with the course; generated from solutions/response/solver_settings.py on the
 # instructor's side.
-"""Settings and figures of the contact solvers (:mod:`.contact_solver`, the plain
-step, and :mod:`.soft_step`, the soft step).  SI units."""
+"""Settings and figures of the contact solvers: :class:`SolverSettings`, read by both
+(:mod:`.contact_solver`, the plain step, and :mod:`.soft_step`, the soft step; its
+position corrections by the plain step only), and :class:`SoftStepSettings`, the soft
+step's own (its contact springs and relax pass).  SI units."""
 from __future__ import annotations
 
 import math
@@ -15,7 +17,9 @@ ORDERS = ("manifolds", "colours")
 @dataclass
 class SolverSettings:
     """Switches and constants of the contact solvers (:class:`~.contact_solver.ContactSolver`
-    and, where said, :class:`~.soft_step.SoftStepSolver`).
+    and :class:`~.soft_step.SoftStepSolver`; the soft step corrects positions with its
+    springs and relax pass, :class:`SoftStepSettings`, instead of ``position_correction``,
+    ``baumgarte``, ``correction_percent`` and ``slop``).
 
     Attributes
     ----------
@@ -68,16 +72,6 @@ class SolverSettings:
     max_push_velocity : float
         Cap (m/s) on the separating speed that removes overlap: the Baumgarte and
         split-impulse bias of the plain step, the soft contact's push in the soft step.
-    contact_hertz : float
-        Soft step only: natural frequency (Hz) of the soft contact spring, capped at a
-        quarter of the sub-step rate (``inf``: the cap).  Contacts against static
-        bodies use twice the frequency.
-    contact_damping_ratio : float
-        Soft step only: damping ratio of the soft contact spring (dimensionless; 1 is
-        critical damping).
-    relax : bool
-        Soft step only: after each sub-step's positions move, solve once more without
-        the push (rigid, no bias), so that the push velocity is not kept.
     """
 
     iterations: int = 10
@@ -94,9 +88,6 @@ class SolverSettings:
     block_solver: bool = True
     order: str = "manifolds"
     max_push_velocity: float = 3.0
-    contact_hertz: float = math.inf
-    contact_damping_ratio: float = 10.0
-    relax: bool = True
 
     def __post_init__(self):
         if self.position_correction not in POSITION_CORRECTIONS:
@@ -109,10 +100,53 @@ class SolverSettings:
         for name in ("baumgarte", "correction_percent"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"{name} must be in [0, 1], got {getattr(self, name)}")
-        for name in ("slop", "restitution_threshold", "warm_start_match_distance", "max_push_velocity",
-                     "contact_hertz", "contact_damping_ratio"):
+        for name in ("slop", "restitution_threshold", "warm_start_match_distance", "max_push_velocity"):
             if not getattr(self, name) >= 0.0:
                 raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
+
+
+@dataclass
+class SoftStepSettings:
+    """The soft step's own settings (:mod:`.soft_step`); the plain step has none of these.
+
+    Attributes
+    ----------
+    contact_hertz : float
+        Natural frequency (Hz) of the soft contact spring, capped at a quarter of the
+        sub-step rate (``inf``: the cap).  Contacts against static bodies use twice the
+        frequency.
+    contact_damping_ratio : float
+        Damping ratio of the soft contact spring (dimensionless; 1 is critical damping).
+    relax : bool
+        After each sub-step's positions move, solve once more without the push (rigid,
+        no bias), so that the push velocity is not kept; joints too.
+    """
+
+    contact_hertz: float = math.inf
+    contact_damping_ratio: float = 10.0
+    relax: bool = True
+
+    def __post_init__(self):
+        for name in ("contact_hertz", "contact_damping_ratio"):
+            if not getattr(self, name) >= 0.0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
+
+
+def split_overrides(overrides: dict) -> tuple[dict, dict]:
+    """Keyword settings split into those of :class:`SolverSettings` and those of
+    :class:`SoftStepSettings`; a name of neither raises a TypeError that lists both.
+
+    >>> split_overrides(dict(iterations=1, relax=False))
+    ({'iterations': 1}, {'relax': False})
+    """
+    solver_names = set(SolverSettings.__dataclass_fields__)
+    soft_names = set(SoftStepSettings.__dataclass_fields__)
+    unknown = sorted(set(overrides) - solver_names - soft_names)
+    if unknown:
+        raise TypeError(f"unknown solver setting(s) {', '.join(unknown)}; SolverSettings has "
+                        f"{', '.join(sorted(solver_names))} and SoftStepSettings {', '.join(sorted(soft_names))}")
+    return ({k: v for k, v in overrides.items() if k in solver_names},
+            {k: v for k, v in overrides.items() if k in soft_names})
 
 
 @dataclass

@@ -40,9 +40,10 @@ slop, the spring itself decides how deep a loaded contact rests.  A
 point that has opened (``s > 0``) may close at up to ``s / h`` and is rigid.  Contacts
 against static bodies use twice the frequency (they must carry whole stacks).  The
 frequency is capped at a quarter of the sub-step rate, ``1 / (4 h)``, where implicit
-Euler stays accurate.  Settings: ``contact_hertz``, ``contact_damping_ratio``,
-``relax``, ``max_push_velocity`` and ``iterations`` (sweeps per pass) of
-:class:`~solutions.response.contact_solver.SolverSettings`.
+Euler stays accurate.  Settings: ``contact_hertz``, ``contact_damping_ratio`` and
+``relax`` of :class:`~solutions.response.solver_settings.SoftStepSettings`, and
+``max_push_velocity`` and ``iterations`` (sweeps per pass) of
+:class:`~solutions.response.solver_settings.SolverSettings`.
 
 Each sweep solves every manifold's normal impulses and then its friction impulses
 (Box2D v3's order), the friction bounded by ``mu`` times the accumulated normal
@@ -59,6 +60,7 @@ from ..body_state import BodyState
 from ..contact import Contact
 from ..solver.kernel import kernel
 from .contact_preparation import ContactPreparation
+from .solver_settings import SoftStepSettings, SolverSettings
 
 
 #: Rigid distance joints in the soft step are springs of this frequency (Hz, capped at
@@ -113,7 +115,7 @@ class SoftStepSolver(ContactPreparation):
             state.integrate_velocities(gravity, h)
             solver.solve_substep(state, h, use_bias=True)     # warm start + soft solve
             state.integrate_positions(h)
-            solver.solve_substep(state, h, use_bias=False)    # relax (if settings.relax)
+            solver.solve_substep(state, h, use_bias=False)    # relax (if soft.relax)
         solver.end_step(state, h)                              # restitution, memory, stats
 
     Every pass is the solver kernel (:func:`~solutions.solver.kernel.solve_constraints`)
@@ -140,6 +142,11 @@ class SoftStepSolver(ContactPreparation):
     (True, True)
     """
 
+    def __init__(self, settings: SolverSettings | None = None, soft: SoftStepSettings | None = None,
+                 backend: str = "python"):
+        super().__init__(settings, backend)
+        self.soft = SoftStepSettings() if soft is None else soft
+
     def begin_step(self, bodies: list[Body], manifolds: list[tuple[int, int, Contact]], h: float) -> None:
         """Prepare the contacts found at the start of the step for sub-steps of ``h`` (s).
 
@@ -161,9 +168,9 @@ class SoftStepSolver(ContactPreparation):
         self._r_dot_n_a, self._r_dot_n_b = c.r_a[:, 0] * nx + c.r_a[:, 1] * ny, c.r_b[:, 0] * nx + c.r_b[:, 1] * ny
         self._r_cross_n_a = c.r_a[:, 0] * ny - c.r_a[:, 1] * nx
         self._r_cross_n_b = c.r_b[:, 0] * ny - c.r_b[:, 1] * nx
-        hertz = min(settings.contact_hertz, 0.25 / h)
-        soft = soft_coefficients(hertz, settings.contact_damping_ratio, h)
-        stiff = soft_coefficients(2.0 * hertz, settings.contact_damping_ratio, h)
+        hertz = min(self.soft.contact_hertz, 0.25 / h)
+        soft = soft_coefficients(hertz, self.soft.contact_damping_ratio, h)
+        stiff = soft_coefficients(2.0 * hertz, self.soft.contact_damping_ratio, h)
         against_static = ((c.ima == 0.0) | (c.imb == 0.0))[c.order]
         # Per point in sweep order (the kernel's order).
         self._bias_rate, self._mass_scale, self._impulse_scale = (
@@ -186,14 +193,14 @@ class SoftStepSolver(ContactPreparation):
 
     def solve_substep(self, state: BodyState, h: float, use_bias: bool) -> None:
         """One pass of ``iterations`` sweeps on ``state``: warm start and soft solve
-        (``use_bias``), or relax (rigid, no push; skipped when ``settings.relax`` is off).
+        (``use_bias``), or relax (rigid, no push; skipped when ``soft.relax`` is off).
 
         The biased pass must come before the sub-step's position update, the relax
         pass after it.
         """
         settings = self.settings
         c = self._contacts
-        if not c.point_count or (not use_bias and not settings.relax):
+        if not c.point_count or (not use_bias and not self.soft.relax):
             return
         velocity = state.velocity[self._rows]
         if use_bias:

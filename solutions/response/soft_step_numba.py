@@ -645,12 +645,12 @@ class CompiledSoftStep:
 
     def step(self, state, h: float, substeps: int, gravity, settings) -> None:
         """One step of ``substeps`` sub-steps of ``h`` (s) on ``state`` (updated in place)."""
-        solver = settings.solver
-        key = (h, solver.contact_hertz, solver.contact_damping_ratio)
+        solver, springs = settings.solver, settings.soft
+        key = (h, springs.contact_hertz, springs.contact_damping_ratio)
         if key != self._coefficients_key:
-            hertz = min(solver.contact_hertz, 0.25 / h)
-            self._coefficients = (soft_coefficients(hertz, solver.contact_damping_ratio, h),
-                                  soft_coefficients(2.0 * hertz, solver.contact_damping_ratio, h),
+            hertz = min(springs.contact_hertz, 0.25 / h)
+            self._coefficients = (soft_coefficients(hertz, springs.contact_damping_ratio, h),
+                                  soft_coefficients(2.0 * hertz, springs.contact_damping_ratio, h),
                                   soft_coefficients(min(JOINT_HERTZ, 0.25 / h), JOINT_DAMPING_RATIO, h),
                                   matmul_rounding()[:2])
             self._coefficients_key = key
@@ -660,7 +660,7 @@ class CompiledSoftStep:
          self.point_floats) = _soft_step(
             state.position, state.angle, state.velocity, state.dynamic, state.turning, self.bodies, self.point_ints,
             self.point_floats, float(dt_ratio), float(h), int(substeps), float(gravity[0]), float(gravity[1]),
-            int(solver.iterations), soft, stiff, bool(solver.relax), float(solver.max_push_velocity),
+            int(solver.iterations), soft, stiff, bool(springs.relax), float(solver.max_push_velocity),
             float(solver.restitution_threshold), bool(solver.friction), bool(solver.warm_starting),
             float(solver.warm_start_match_distance), bool(solver.block_solver), ORDER_KINDS[solver.order],
             SPECULATIVE_MARGIN, corner_rounding, incident_rounding, self.circles, bool(solver.rotation),

@@ -209,6 +209,9 @@ class World:
         """Advance the world by ``dt`` seconds (``substeps`` sub-steps)."""
         if not (dt > 0 and math.isfinite(dt)):
             raise ValueError(f"dt must be a positive number of seconds, got {dt}")
+        if len(self.bodies) != len(self.state):
+            raise ValueError(f"the world was made with {len(self.state)} bodies and now lists {len(self.bodies)}: "
+                             "bodies cannot be added or removed; make a new World with the new list")
         h = dt / self.settings.substeps
         if self.settings.soft_step:
             self.soft_step(h)

@@ -82,3 +82,12 @@ def test_a_body_that_cannot_turn_has_no_angular_velocity_in_a_world():
     world = World([slider])
     world.step(1 / 60)
     assert slider.angular_velocity == 0.0 and slider.angle == 0.0
+
+
+def test_a_world_refuses_bodies_added_after_it_was_made():
+    from solutions.world import World
+
+    world = World([Body.box(10, 1, is_static=True)])
+    world.bodies.append(Body.circle(0.5, position=(0, 2)))
+    with pytest.raises(ValueError, match="made with 1 bodies and now lists 2"):
+        world.step(1 / 60)

@@ -159,3 +159,5 @@ def test_demo_runs_the_recommended_settings(capsys):
     out = capsys.readouterr().out
     assert "reference: soft step, 8 sub-steps x 1 sweeps; pymunk: 10 iterations" in out
     assert out.count("reference") == 2 and "pymunk" in out
+    assert main(["pyramid_10", "--recommended", "--compiled", "--seconds", "0.25"]) == 0
+    assert "reference: soft step, 8 sub-steps x 1 sweeps, compiled; pymunk" in capsys.readouterr().out

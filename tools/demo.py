@@ -1,13 +1,14 @@
 """Simulate a named scene with the reference engine and with pymunk, and summarise both.
 
-    python -m tools.demo [SCENE] [--seconds S] [--iterations N] [--recommended]
+    python -m tools.demo [SCENE] [--seconds S] [--iterations N] [--recommended] [--compiled]
     python -m tools.demo --list
 
 Prints, for each engine: wall time per step, deepest penetration and largest drift
 seen, and the change of total energy and of linear momentum.  Both engines are
 measured by the same yardstick (:mod:`solutions.scene_metrics`).  With
 ``--recommended`` the reference engine runs the scene's recommended settings (the
-soft step for the hard scenes) and pymunk still runs ``--iterations``.
+soft step for the hard scenes) and pymunk still runs ``--iterations``; with
+``--compiled`` it runs the compiled twins (``backend="numba"``: the same motion).
 """
 from __future__ import annotations
 
@@ -47,12 +48,16 @@ def summarise(label, bodies, gravity, run_step, steps, probe_every):
 
 
 def run_scene(name: str, seconds: float | None = None, iterations: int = 10,
-              recommended: bool = False) -> list[dict]:
+              recommended: bool = False, compiled: bool = False) -> list[dict]:
     """Measurements of scene ``name`` for the reference engine and pymunk."""
     scene = get_scene(name)
     steps = round((seconds if seconds is not None else scene.duration) / scene.dt)
     probe_every = max(1, steps // 60)
-    world = scene.build_world(scene.recommended_settings() if recommended else None, iterations=iterations)
+    settings = scene.recommended_settings() if recommended else scene.world_settings(iterations=iterations)
+    if compiled:
+        settings.backend = "numba"
+        scene.build_world(settings).step(scene.dt)        # compile (or load the cache) before timing
+    world = scene.build_world(settings)
     rows = [summarise("reference", world.bodies, scene.gravity, lambda: world.step(scene.dt), steps, probe_every)]
     mirror_bodies = scene.make_bodies()
     space, pm_bodies = build_space(mirror_bodies, scene.gravity, iterations, world.settings.solver.slop)
@@ -88,6 +93,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--iterations", type=int, default=10, help="solver iterations for both engines")
     parser.add_argument("--recommended", action="store_true",
                         help="the reference engine runs the scene's recommended settings (soft step for hard scenes)")
+    parser.add_argument("--compiled", action="store_true",
+                        help="the reference engine runs its compiled twins (backend='numba', the same motion)")
     parser.add_argument("--list", action="store_true", help="list the scenes and exit")
     args = parser.parse_args(argv)
     if args.list:
@@ -105,11 +112,11 @@ def main(argv: list[str] | None = None) -> int:
         settings = scene.recommended_settings()
         step = (f"soft step, {settings.substeps} sub-steps x {settings.solver.iterations} sweeps"
                 if settings.soft_step else f"{settings.solver.iterations} solver iterations")
-        print(f"{seconds:g} s simulated at dt = {scene.dt:.4g} s; reference: {step}; "
-              f"pymunk: {args.iterations} iterations\n")
+        print(f"{seconds:g} s simulated at dt = {scene.dt:.4g} s; reference: {step}"
+              f"{', compiled' if args.compiled else ''}; pymunk: {args.iterations} iterations\n")
     else:
         print(f"{seconds:g} s simulated at dt = {scene.dt:.4g} s, {args.iterations} solver iterations\n")
-    print(format_rows(run_scene(args.scene, seconds, args.iterations, args.recommended)))
+    print(format_rows(run_scene(args.scene, seconds, args.iterations, args.recommended, args.compiled)))
     return 0
 
 

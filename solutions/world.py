@@ -38,6 +38,7 @@ from .broadphase.uniform_grid import pairs_uniform_grid, suggest_cell_size
 from .continuous import swept_aabb, time_of_impact
 from .contact import Contact
 from .joints import DistanceJoint, JointSolver
+from .made_when_asked import MadeWhenAsked
 from .narrowphase.dispatch import collide
 from .narrowphase.speculative import SPECULATIVE_MARGIN, speculative_polygon_manifold
 from .response.contact_solver import BACKENDS, ContactSolver, SolverSettings
@@ -170,6 +171,11 @@ class World:
     True
     """
 
+    # The last (sub-)step's manifolds ``(i, j, Contact)`` and figures (:class:`StepStats`);
+    # after a compiled step, made when first read.
+    manifolds = MadeWhenAsked()
+    stats = MadeWhenAsked()
+
     def __init__(self, bodies: list[Body], settings: WorldSettings | None = None,
                  joints: list[DistanceJoint] | None = None):
         self.bodies = list(bodies)
@@ -192,9 +198,8 @@ class World:
                                         self.settings.solver.warm_starting, backend)
         self.time = 0.0
         self.manifolds = []
-        self._compiled_stats_pending = False
         #: The soft step compiled whole (:mod:`~solutions.response.soft_step_numba`), for a
-        #: world of boxes with ``backend="numba"``; None where the readable stages run.
+        #: world of boxes or of discs with ``backend="numba"``; None where the readable stages run.
         self.compiled_soft_step = None
         if self.settings.backend == "numba" and self.settings.soft_step:
             from .response.soft_step_numba import CompiledSoftStep
@@ -227,17 +232,6 @@ class World:
             self.integrate_positions(displacements, h)
             self.solver.finish_step(self.bodies, self.manifolds, h)
             self.time += h
-
-    @property
-    def manifolds(self) -> list[tuple[int, int, Contact]]:
-        """The contact manifolds ``(i, j, Contact)`` of the last (sub-)step."""
-        if callable(self._manifolds):          # the compiled step makes them when asked
-            self._manifolds = self._manifolds()
-        return self._manifolds
-
-    @manifolds.setter
-    def manifolds(self, value) -> None:
-        self._manifolds = value
 
     def soft_step(self, h: float) -> None:
         """One step of ``substeps`` soft sub-steps of ``h`` (:mod:`~solutions.response.soft_step`)."""
@@ -282,25 +276,12 @@ class World:
             self.time += h
         # Contacts and figures are made when asked for.
         self.manifolds = compiled.contacts
-        self._compiled_stats_pending = True
+        self.stats = lambda: StepStats(candidate_pairs=int(compiled.candidate_pairs),
+                                       manifolds=compiled.manifold_count,
+                                       contact_points=len(compiled.point_floats),
+                                       max_penetration=compiled.stats.max_penetration)
         self.solver.stats = lambda: compiled.stats
         self.solver.contact_impulses = compiled.contact_impulses
-
-    @property
-    def stats(self) -> StepStats:
-        """What the last sub-step saw (:class:`StepStats`)."""
-        if self._compiled_stats_pending:    # after a compiled step, made when asked for
-            self._compiled_stats_pending = False
-            compiled = self.compiled_soft_step
-            solver_stats = compiled.stats
-            self._stats = StepStats(candidate_pairs=int(compiled.candidate_pairs), manifolds=solver_stats.manifolds,
-                                    contact_points=solver_stats.contact_points,
-                                    max_penetration=solver_stats.max_penetration)
-        return self._stats
-
-    @stats.setter
-    def stats(self, value: StepStats) -> None:
-        self._stats = value
 
     # The stages -----------------------------------------------------------------
     def apply_gravity(self, h: float) -> None:

@@ -23,8 +23,9 @@ from ..body import Body
 from ..contact import Contact
 from ..solver.constraint_rows import ConstraintRows, block_is_well_conditioned, normal_block_matrix
 from ..solver.sweep_order import sweep_order
-from .solver_settings import SolverSettings, SolverStats
+from ..made_when_asked import MadeWhenAsked
 from ..twins import require_twins
+from .solver_settings import SolverSettings, SolverStats
 
 #: The twins of the solver kernel (:func:`solutions.solver.kernel.kernel`).
 BACKENDS = ("python", "numba")
@@ -100,6 +101,10 @@ class ContactPreparation:
         tangent one along ``(n_y, -n_x)``.
     """
 
+    # After a compiled step, made when first read (see the class docstring for both).
+    stats = MadeWhenAsked()
+    contact_impulses = MadeWhenAsked()
+
     def __init__(self, settings: SolverSettings | None = None, backend: str = "python"):
         self.settings = SolverSettings() if settings is None else settings
         if backend not in BACKENDS:
@@ -110,28 +115,6 @@ class ContactPreparation:
         self.stats = SolverStats()
         self.contact_impulses: list[tuple] = []
         self.reset()
-
-    @property
-    def stats(self) -> SolverStats:
-        """See the class docstring (made when first asked for, after a compiled step)."""
-        if callable(self._stats):
-            self._stats = self._stats()
-        return self._stats
-
-    @stats.setter
-    def stats(self, value) -> None:
-        self._stats = value
-
-    @property
-    def contact_impulses(self) -> list[tuple]:
-        """See the class docstring (made when first asked for, after a compiled step)."""
-        if callable(self._contact_impulses):
-            self._contact_impulses = self._contact_impulses()
-        return self._contact_impulses
-
-    @contact_impulses.setter
-    def contact_impulses(self, value) -> None:
-        self._contact_impulses = value
 
     def reset(self) -> None:
         """Forget last step's impulses (for example after bodies were removed and

@@ -344,7 +344,7 @@ def _zero_static_velocities(velocity, static_members):
 @njit(cache=True)
 def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, old_floats, dt_ratio, h, substeps,
                gravity_x, gravity_y, iterations, soft, stiff, relax, max_push, restitution_threshold,
-               use_friction, warm_start, match_distance, block_solver, order_kind, margin, corner_rounding,
+               use_friction, warm_start, match_distance, block_solver, colours, margin, corner_rounding,
                incident_rounding, circles, rotation, jointed, joint_a, joint_b, anchors, length, frequency, damping,
                joint_impulses, joint_softness):
     n = angle.shape[0]
@@ -453,7 +453,6 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
     body_a, body_b = np.empty(g_count, np.int64), np.empty(g_count, np.int64)
     for q in range(g_count):
         body_a[q], body_b[q] = man_pair[q] // n, man_pair[q] % n
-    colours = order_kind == 1
     manifold_order = _sweep_order(body_a, body_b, movable, colours)
     order = np.empty(p_count, np.int64)
     first = np.empty(g_count, np.int64)
@@ -593,10 +592,6 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
     return m, g_count, warm_started, block_count, ints, floats
 
 
-#: ``SolverSettings.order`` as the compiled step takes it.
-ORDER_KINDS = {"manifolds": 0, "colours": 1}
-
-
 class CompiledSoftStep:
     """:meth:`World.soft_step` compiled whole, for a world of boxes or of discs (module docstring).
 
@@ -662,7 +657,7 @@ class CompiledSoftStep:
             self.point_floats, float(dt_ratio), float(h), int(substeps), float(gravity[0]), float(gravity[1]),
             int(solver.iterations), soft, stiff, bool(springs.relax), float(solver.max_push_velocity),
             float(solver.restitution_threshold), bool(solver.friction), bool(solver.warm_starting),
-            float(solver.warm_start_match_distance), bool(solver.block_solver), ORDER_KINDS[solver.order],
+            float(solver.warm_start_match_distance), bool(solver.block_solver), solver.order == "colours",
             SPECULATIVE_MARGIN, corner_rounding, incident_rounding, self.circles, bool(solver.rotation),
             self.jointed, self.joint_a, self.joint_b, self.anchors, self.joint_length, self.joint_frequency,
             self.joint_damping, self.joint_impulses, joint_softness)

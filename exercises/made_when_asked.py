@@ -1,0 +1,35 @@
+# Library file of the collision course (you do not need to edit it).
+# Handed out with the course; generated from solutions/made_when_asked.py on the instructor's side.
+"""An attribute that can be given a recipe instead of a value.
+
+The compiled soft step (:mod:`~solutions.response.soft_step_numba`) leaves its results
+in arrays; making Python objects of them (contacts, figures) would cost more than the
+step.  So it sets such attributes to a function of no arguments, and the first read
+calls it and keeps what it returns.  Any other value is stored and read as usual.
+
+>>> class Step:
+...     figures = MadeWhenAsked()
+>>> step = Step()
+>>> step.figures = lambda: [1, 2]
+>>> step.figures, step.figures is step.figures
+([1, 2], True)
+"""
+from __future__ import annotations
+
+
+class MadeWhenAsked:
+    """A data descriptor: a callable value is called on the first read and replaced by its result."""
+
+    def __set_name__(self, owner, name: str) -> None:
+        self.slot = "_" + name
+
+    def __get__(self, instance, owner=None):
+        if instance is None:
+            return self
+        value = instance.__dict__[self.slot]
+        if callable(value):
+            value = instance.__dict__[self.slot] = value()
+        return value
+
+    def __set__(self, instance, value) -> None:
+        instance.__dict__[self.slot] = value

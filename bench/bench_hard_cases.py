@@ -14,8 +14,10 @@ Every scene runs under every setting of the grid, side by side in one run:
 - Box2D 2.3 (tools/box2d_mirror.py: polygons inset by Box2D's 0.01 m skin, materials
   mixed as the reference's products): time step x velocity/position iterations.
 
-The runs of one scene advance together, one frame (1/60 s of simulated time) each in
-turn, so a busy machine slows all of them alike; the cost is the processor time per
+The runs of one scene advance together, 20 frames (of 1/60 s of simulated time) each in
+turn, in a new random order for each block, so a busy machine slows all of them alike
+and each runs with its own code and data in the caches, as a program stepping one
+world does; the cost is the processor time per
 frame spent stepping (for pymunk and Box2D their own step: copying their state into
 the reference bodies to measure them is not counted).  Every run is measured by one
 yardstick (solutions/scene_metrics.py, the reference narrow phase for overlaps): the
@@ -71,6 +73,14 @@ QUICK_SOFT_GRID = [(4, 1), (8, 1)]
 QUICK_COMPILED_SOFT_GRID = [(2, 1), (4, 1), (8, 1)]
 QUICK_TIME_STEPS = (1 / 60, 1 / 120)
 PROBES = 30             # overlap measurements per run
+#: The runs of a scene take turns in blocks of this many frames, in a new random order
+#: for every block.  Frame by frame in a fixed order, each run found the caches full of
+#: the previous run's code and data: the run after one of another engine measured 2 to 3
+#: times slower than the same setting elsewhere in the list (pymunk at 10 iterations
+#: slower than at 30, Box2D at 8/3 slower than at 30/10), and every engine ran cold,
+#: as no program that steps one world runs.
+BLOCK_FRAMES = 20
+SHUFFLE_SEED = 2026
 
 
 @dataclass
@@ -150,24 +160,27 @@ def simulate(name: str, seconds: float, quick: bool) -> list[dict]:
     runs = make_runs(name, quick)
     energy0 = [metrics.total_energy(run.bodies, scene.gravity) for run in runs]
     frames = round(seconds / FRAME)
-    for frame in range(frames):
-        probe = frame % max(1, frames // PROBES) == 0 or frame == frames - 1
-        for run, e0 in zip(runs, energy0):
-            steps = round(FRAME / run.dt)
-            start = time.process_time()
-            for _ in range(steps):
-                run.step()
-            run.seconds += time.process_time() - start
-            if run.sync:
-                run.sync()
-            run.stretch = max(run.stretch, longest_stretch(run))
-            if probe or frame == round(1.0 / FRAME) - 1:
-                deepest = metrics.max_penetration(run.bodies)
-                run.penetration = max(run.penetration, deepest)
-                run.drift = max(run.drift, metrics.max_drift(run.bodies, run.start))
-                run.energy_gain = max(run.energy_gain, metrics.total_energy(run.bodies, scene.gravity) - e0)
-                if frame == round(1.0 / FRAME) - 1 or (frame == frames - 1 and frames < round(1.0 / FRAME)):
-                    run.overlap_after_1s = deepest
+    shuffle = np.random.default_rng(SHUFFLE_SEED)
+    for block in range(0, frames, BLOCK_FRAMES):
+        for index in shuffle.permutation(len(runs)):
+            run, e0 = runs[index], energy0[index]
+            for frame in range(block, min(block + BLOCK_FRAMES, frames)):
+                probe = frame % max(1, frames // PROBES) == 0 or frame == frames - 1
+                steps = round(FRAME / run.dt)
+                start = time.process_time()
+                for _ in range(steps):
+                    run.step()
+                run.seconds += time.process_time() - start
+                if run.sync:
+                    run.sync()
+                run.stretch = max(run.stretch, longest_stretch(run))
+                if probe or frame == round(1.0 / FRAME) - 1:
+                    deepest = metrics.max_penetration(run.bodies)
+                    run.penetration = max(run.penetration, deepest)
+                    run.drift = max(run.drift, metrics.max_drift(run.bodies, run.start))
+                    run.energy_gain = max(run.energy_gain, metrics.total_energy(run.bodies, scene.gravity) - e0)
+                    if frame == round(1.0 / FRAME) - 1 or (frame == frames - 1 and frames < round(1.0 / FRAME)):
+                        run.overlap_after_1s = deepest
     rows = []
     for run in runs:
         error = {"chain_40": run.stretch, "overlap_recovery": run.overlap_after_1s}.get(

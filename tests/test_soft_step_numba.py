@@ -148,3 +148,19 @@ def test_a_second_world_takes_the_bodies_and_the_first_keeps_its_state():
     second.step(1 / 60)
     np.testing.assert_array_equal(first.state.position, kept)
     assert bodies[1].position.tolist() == second.state.position[1].tolist() != kept[1].tolist()
+
+
+@pytest.mark.parametrize("order", ["manifolds", "colours"])
+def test_the_compiled_sweep_order_is_the_readable_one(order):
+    """Random manifolds among a few bodies, some of them static: the same visiting order
+    (the batches stably sorted) as solutions.solver.sweep_order."""
+    from solutions.response.soft_step_numba import _sweep_order
+    from solutions.solver.sweep_order import sweep_order
+
+    rng = np.random.default_rng(7)
+    for _ in range(300):
+        n, m = int(rng.integers(1, 30)), int(rng.integers(0, 50))
+        body_a, body_b = rng.integers(0, n, m), rng.integers(0, n, m)
+        movable = rng.random(n) < 0.8
+        want, _ = sweep_order(body_a, body_b, movable, order)
+        assert _sweep_order(body_a, body_b, movable, order == "colours").tolist() == want.tolist()

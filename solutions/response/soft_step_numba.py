@@ -140,7 +140,18 @@ def _sweep_order(body_a, body_b, movable, colours):
                 after[i] = c + 1
             if movable[j]:
                 after[j] = c + 1
-    return np.argsort(batch, kind="mergesort")
+    # A stable sort by batch (a counting sort: batches are small numbers; numba's
+    # mergesort took 15 us for 590 manifolds, this 1 us).
+    start = np.zeros(m + 2, dtype=np.int64)
+    for k in range(m):
+        start[batch[k] + 1] += 1
+    for c in range(1, m + 2):
+        start[c] += start[c - 1]
+    order = np.empty(m, dtype=np.int64)
+    for k in range(m):
+        order[start[batch[k]]] = k
+        start[batch[k]] += 1
+    return order
 
 
 @njit(cache=True)

@@ -1,21 +1,43 @@
 # Library file of the collision course (you do not need to edit it).
 # Handed out with the course; generated from solutions/world.py on the instructor's side.
-"""The world step: integrate forces, broad phase, narrow phase, resolve, integrate.
+"""The world step: find contacts, prepare them, integrate forces, resolve, integrate.
 
-:meth:`World.step` reads like the algorithm (as box2d-lite's ``World::Step`` does)::
+:meth:`World.step` reads like the algorithm, one outline in Box2D v3's order for both
+of its steps::
 
-    for each sub-step of length h = dt / substeps:
-        apply gravity             v += h g                      (dynamic bodies)
-        broad phase               candidate pairs (i, j), i < j, never static-static
-        narrow phase              manifolds (i, j, Contact), normal from body i to body j
-        resolve                   sequential impulses on velocities (solver settings)
-        solve joints              sequential impulses on the distance joints
-        sweep bullets             continuous detection: fast bodies stop at first contact
-        integrate positions       x += h v, angle += h w
-        correct positions         linear projection / split impulse, if the solver uses it
+    for each round of contacts:
+        find contacts             broad phase: candidate pairs (i, j), i < j, never static-static;
+                                  narrow phase: manifolds (i, j, Contact), normal from i to j
+        prepare contacts          lever arms, effective masses, last step's impulses
+        for each sub-step of length h:
+            integrate velocities  v += h g                      (dynamic bodies)
+            solve contacts        warm start, then sequential impulses on velocities
+            solve joints          the same kernel on the distance joints
+            integrate positions   x += h v, angle += h w        (plain: bullets stop at first contact)
+            relax joints          (soft step)
+            relax contacts        soft step: a rigid pass without push;
+                                  plain step: position correction (projection or split impulse)
+        end contacts              restitution (soft step), impulses remembered for the next step
+        (soft step) stop bullets  continuous detection over the whole step
 
-With ``soft_step`` the contacts are found once per step and each sub-step solves soft
-contacts and relaxes them instead (:mod:`solutions.response.soft_step`, Box2D v3).
+The two steps are two configurations of this outline:
+
+- the **plain step** (box2d-lite, Box2D v2; :class:`~solutions.response.contact_solver.ContactSolver`):
+  one sub-step per round of contacts, found again every sub-step; rigid rows, the
+  restitution target and the Baumgarte bias inside the solve (restitution aims at the
+  closing speeds after gravity, as box2d-lite measures them); bullets swept every
+  sub-step;
+- the **soft step** (Box2D v3; :class:`~solutions.response.soft_step.SoftStepSolver`,
+  ``soft_step=True``): one round of speculative contacts per step and ``substeps``
+  sub-steps on it; soft rows that push with a damped spring, a relax pass, a
+  restitution pass at the end (from the closing speeds at the start); bullets swept
+  once per step.
+
+Both solvers prepare their contacts with the same prestep
+(:class:`~solutions.response.contact_preparation.ContactPreparation`), and every pass
+of either is the same solver kernel (:mod:`solutions.solver.kernel`) with other
+targets, mass scales and impulse scales.  ``backend="numba"`` runs the soft step of a
+world of boxes or of discs compiled whole (:mod:`~solutions.response.soft_step_numba`).
 
 Every technique is a switch of :class:`WorldSettings`, of the solvers'
 :class:`~solutions.response.solver_settings.SolverSettings` or of the soft step's
@@ -213,65 +235,41 @@ class World:
 
     # The algorithm --------------------------------------------------------------
     def step(self, dt: float) -> None:
-        """Advance the world by ``dt`` seconds (``substeps`` sub-steps)."""
+        """Advance the world by ``dt`` seconds (``substeps`` sub-steps of ``h``)."""
         if not (dt > 0 and math.isfinite(dt)):
             raise ValueError(f"dt must be a positive number of seconds, got {dt}")
         if len(self.bodies) != len(self.state):
             raise ValueError(f"the world was made with {len(self.state)} bodies and now lists {len(self.bodies)}: "
                              "bodies cannot be added or removed; make a new World with the new list")
         h = dt / self.settings.substeps
-        if self.settings.soft_step:
-            self.soft_step(h)
-            return
-        for _ in range(self.settings.substeps):
-            self.apply_gravity(h)
-            shapes = self.world_shapes()
-            pairs = self.broad_phase(shapes)
-            self.manifolds = self.narrow_phase(shapes, pairs)
-            self.solver.solve(self.bodies, self.manifolds, h)
-            self.joint_solver.solve(self.bodies, self.joints, h)
-            displacements = self.sweep_bullets(shapes, h)
-            self.integrate_positions(displacements, h)
-            self.solver.finish_step(self.bodies, self.manifolds, h)
-            self.time += h
-
-    def soft_step(self, h: float) -> None:
-        """One step of ``substeps`` soft sub-steps of ``h`` (:mod:`~solutions.response.soft_step`)."""
-        if self.compiled_soft_step is not None:
+        if self.compiled_soft_step is not None:        # the same soft step, compiled whole
             self.compiled_step(h)
             return
-        shapes = self.world_shapes()
-        pairs = self.broad_phase(shapes, margin=SPECULATIVE_MARGIN)
-        self.manifolds = self.speculative_narrow_phase(shapes, pairs)   # once per step
-        self.solver.begin_step(self.bodies, self.manifolds, h)
-        state = self.state
-        # Continuous detection once per step, as Box2D v3 does (at the end, from here).
-        starts = {k: state.position[k].copy() for k, b in enumerate(self.bodies)
-                  if b.is_bullet and not b.is_static} if self.settings.continuous else {}
+        soft = self.settings.soft_step
+        # The plain step finds contacts again for every sub-step (each is a whole step of
+        # h); the soft step finds them once and takes all its sub-steps on them.
+        rounds, substeps = (1, self.settings.substeps) if soft else (self.settings.substeps, 1)
         gravity = np.asarray(self.settings.gravity, dtype=float)
-        joint_softness = soft_coefficients(min(JOINT_HERTZ, 0.25 / h), JOINT_DAMPING_RATIO, h)
-        for _ in range(self.settings.substeps):
-            state.integrate_velocities(gravity, h)
-            self.solver.solve_substep(state, h, use_bias=True)
-            if self.joints:   # the joint solver works on the bodies, which are rows of the state
-                self.joint_solver.solve(self.bodies, self.joints, h, softness=joint_softness)
-            state.integrate_positions(h)
-            if self.joints and self.settings.soft.relax:
-                self.joint_solver.solve(self.bodies, self.joints, h, use_bias=False)
-            self.solver.solve_substep(state, h, use_bias=False)
-            self.time += h
-        self.solver.end_step(state, h)
-        # A bullet whose path over the whole step crossed a static body goes back to
-        # where it first touched it; the next step's contacts turn it round.
-        for index, start in starts.items():
-            move = state.position[index] - start
-            first = self.time_of_first_hit(shapes[index], move)
-            if first < 1.0:
-                state.position[index] = start + first * move
-                self.stats.bullets_stopped += 1
+        state = self.state
+        for _ in range(rounds):
+            shapes = self.world_shapes()
+            self.manifolds = self.find_contacts(shapes)
+            self.solver.begin_step(self.bodies, self.manifolds, h)
+            starts = self.bullet_starts() if soft else {}
+            for _ in range(substeps):
+                state.integrate_velocities(gravity, h)
+                self.solver.solve_substep(state, h, use_bias=True)
+                self.solve_joints(h, use_bias=True)
+                moves = {} if soft else self.sweep_bullets(shapes, h)
+                self.integrate_positions(moves, h)
+                self.solve_joints(h, use_bias=False)
+                self.solver.solve_substep(state, h, use_bias=False)
+                self.time += h
+            self.solver.end_step(state, h)
+            self.stop_bullets(shapes, starts)
 
     def compiled_step(self, h: float) -> None:
-        """:meth:`soft_step` as one compiled function (:mod:`~solutions.response.soft_step_numba`)."""
+        """The soft step (:meth:`step` with ``soft_step``) as one compiled function (:mod:`~solutions.response.soft_step_numba`)."""
         compiled = self.compiled_soft_step
         compiled.step(self.state, h, self.settings.substeps, self.settings.gravity, self.settings)
         for _ in range(self.settings.substeps):
@@ -286,6 +284,48 @@ class World:
         self.solver.contact_impulses = compiled.contact_impulses
 
     # The stages -----------------------------------------------------------------
+    def find_contacts(self, shapes: list[Shape]) -> list[tuple[int, int, Contact]]:
+        """Broad and narrow phase: the manifolds ``(i, j, Contact)`` at the current poses.
+        The soft step's are speculative: points up to ``SPECULATIVE_MARGIN`` apart, each
+        with its signed separation."""
+        if self.settings.soft_step:
+            return self.speculative_narrow_phase(shapes, self.broad_phase(shapes, margin=SPECULATIVE_MARGIN))
+        return self.narrow_phase(shapes, self.broad_phase(shapes))
+
+    def solve_joints(self, h: float, use_bias: bool) -> None:
+        """The distance joints' pass of a sub-step: biased after the contacts' velocity
+        pass, unbiased (the soft step's relax, if on) after the positions moved.  The
+        plain step's rods are rigid with a Baumgarte bias; the soft step's are stiff
+        springs (``JOINT_HERTZ``, capped at a quarter of the sub-step rate)."""
+        if not self.joints:
+            return
+        if not self.settings.soft_step:
+            if use_bias:
+                self.joint_solver.solve(self.bodies, self.joints, h)
+        elif use_bias:
+            softness = soft_coefficients(min(JOINT_HERTZ, 0.25 / h), JOINT_DAMPING_RATIO, h)
+            self.joint_solver.solve(self.bodies, self.joints, h, softness=softness)
+        elif self.settings.soft.relax:
+            self.joint_solver.solve(self.bodies, self.joints, h, use_bias=False)
+
+    def bullet_starts(self) -> dict[int, np.ndarray]:
+        """Where each bullet is at the start of a soft step, which sweeps them once per
+        step, at its end (:meth:`stop_bullets`), as Box2D v3 does."""
+        if not self.settings.continuous:
+            return {}
+        return {k: self.state.position[k].copy() for k, body in enumerate(self.bodies)
+                if body.is_bullet and not body.is_static}
+
+    def stop_bullets(self, shapes: list[Shape], starts: dict[int, np.ndarray]) -> None:
+        """A bullet whose path from ``starts`` crossed a static body goes back to where
+        it first touched it; the next step's contacts turn it round."""
+        for index, start in starts.items():
+            move = self.state.position[index] - start
+            first = self.time_of_first_hit(shapes[index], move)
+            if first < 1.0:
+                self.state.position[index] = start + first * move
+                self.stats.bullets_stopped += 1
+
     def apply_gravity(self, h: float) -> None:
         """v += h g for every dynamic body."""
         self.state.integrate_velocities(np.asarray(self.settings.gravity, dtype=float), h)

@@ -205,3 +205,63 @@ def test_auto_broad_phase_takes_the_fastest_measured_method(monkeypatch):
         every = World(bodies, WorldSettings(gravity=(0.0, 0.0), broad_phase="all_pairs"))
         assert found == {(i, j) for i, j, _ in every.narrow_phase(shapes, every.broad_phase(shapes))}
         monkeypatch.undo()
+
+
+def step_by_hand(world: World, dt: float) -> None:
+    """World.step's outline (solutions/world.py), written out with the world's stages."""
+    soft = world.settings.soft_step
+    rounds, substeps = (1, world.settings.substeps) if soft else (world.settings.substeps, 1)
+    h = dt / world.settings.substeps
+    for _ in range(rounds):
+        shapes = world.world_shapes()
+        world.manifolds = world.find_contacts(shapes)
+        world.solver.begin_step(world.bodies, world.manifolds, h)
+        starts = world.bullet_starts() if soft else {}
+        for _ in range(substeps):
+            world.apply_gravity(h)
+            world.solver.solve_substep(world.state, h, use_bias=True)
+            world.solve_joints(h, use_bias=True)
+            world.integrate_positions({} if soft else world.sweep_bullets(shapes, h), h)
+            world.solve_joints(h, use_bias=False)
+            world.solver.solve_substep(world.state, h, use_bias=False)
+            world.time += h
+        world.solver.end_step(world.state, h)
+        world.stop_bullets(shapes, starts)
+
+
+OUTLINE_CASES = [("box_on_slope", False, dict(position_correction="projection"), 2),
+                 ("stack_10", False, dict(position_correction="split_impulse"), 1),
+                 ("ball_drop", False, dict(position_correction="baumgarte"), 3),
+                 ("bullet_wall", False, {}, 2), ("chain_40", False, {}, 1),
+                 ("pyramid_10", True, {}, 4), ("chain_40", True, {}, 4), ("bullet_wall", True, {}, 2),
+                 ("chain_40", True, dict(relax=False), 4)]
+
+
+@pytest.mark.parametrize("name, soft, overrides, substeps", OUTLINE_CASES,
+                         ids=[f"{c[0]}-{'soft' if c[1] else 'plain'}-{c[3]}" for c in OUTLINE_CASES])
+def test_the_plain_and_soft_steps_are_one_outline_of_stages(name, soft, overrides, substeps):
+    """Both steps are configurations of one outline: running the world's stages by hand
+    in the documented order moves every body bit for bit as World.step does."""
+    scene = get_scene(name)
+    settings = scene.world_settings(**overrides)
+    settings.soft_step, settings.substeps = soft, substeps
+    stepped, by_hand = scene.build_world(settings), scene.build_world(settings)
+    for _ in range(20):
+        stepped.step(scene.dt)
+        step_by_hand(by_hand, scene.dt)
+    assert np.array_equal(stepped.state.velocity, by_hand.state.velocity)
+    assert np.array_equal(stepped.state.position, by_hand.state.position)
+    assert stepped.stats == by_hand.stats and stepped.time == by_hand.time
+
+
+@pytest.mark.parametrize("soft", [False, True])
+def test_restitution_aims_at_the_closing_speed_after_gravity_plain_and_before_it_soft(soft):
+    """A ball hitting the ground at 3 m/s with e = 0.5: the plain step (box2d-lite)
+    measures the closing speed after this step's gravity, the soft step (Box2D v3)
+    at the start of the step, before gravity."""
+    ground = Body.box(10.0, 1.0, position=(0.0, -0.5), is_static=True, restitution=1.0)
+    ball = Body.circle(0.5, position=(0.0, 0.5), velocity=(0.0, -3.0), restitution=0.5)
+    settings = WorldSettings(soft_step=soft, solver=SolverSettings(position_correction="none"))
+    World([ground, ball], settings).step(1 / 60)
+    want = 0.5 * (3.0 + 9.81 / 60) if not soft else 0.5 * 3.0
+    assert ball.velocity[1] == pytest.approx(want, abs=1e-12)

@@ -30,6 +30,30 @@ from .solver_settings import SolverSettings, SolverStats
 #: The twins of the solver kernel (:func:`solutions.solver.kernel.kernel`).
 BACKENDS = ("python", "numba")
 
+def closing_speeds(velocity: np.ndarray, a: np.ndarray, b: np.ndarray, nx: np.ndarray, ny: np.ndarray,
+                   rn_a: np.ndarray, rn_b: np.ndarray) -> np.ndarray:
+    """Relative normal velocity ``v_n`` (m/s, < 0 closing) of each contact point, from the
+    velocity rows ``(vx, vy, w)`` of its bodies ``a`` and ``b`` and its normal and
+    ``r x n`` lever arms.
+
+    >>> closing_speeds(np.array([[0.0, 0.0, 0.0], [0.0, -2.0, 1.0]]), np.array([0]), np.array([1]),
+    ...                np.array([0.0]), np.array([1.0]), np.array([0.0]), np.array([0.5])).tolist()
+    [-1.5]
+    """
+    va, vb = velocity[a], velocity[b]
+    return (vb[:, 0] - va[:, 0]) * nx + (vb[:, 1] - va[:, 1]) * ny + vb[:, 2] * rn_b - va[:, 2] * rn_a
+
+
+def restitution_targets(normal_velocity: np.ndarray, restitution: np.ndarray, threshold: float) -> np.ndarray:
+    """The separating speed restitution aims at (m/s): ``-e v_n`` where the point closes
+    faster than ``threshold`` (m/s), else 0 (resting contacts do not bounce).
+
+    >>> restitution_targets(np.array([-2.0, -0.5, 1.0]), np.array([0.5, 0.5, 0.5]), 1.0).tolist()
+    [1.0, 0.0, 0.0]
+    """
+    return np.where(normal_velocity < -threshold, -restitution * normal_velocity, 0.0)
+
+
 @dataclass
 class PreparedContacts:
     """The contact points of one step, gathered and pre-computed once (the prestep).
@@ -175,10 +199,8 @@ class ContactPreparation:
         # A point between two static bodies gets mass 0: no impulse can move them.
         mass_normal = np.divide(1.0, k_normal, out=np.zeros(point_count), where=k_normal > 0.0)
         mass_tangent = np.divide(1.0, k_tangent, out=np.zeros(point_count), where=k_tangent > 0.0)
-        va, vb = velocity[a], velocity[b]
-        normal_velocity = ((vb[:, 0] - va[:, 0]) * nx + (vb[:, 1] - va[:, 1]) * ny
-                           + vb[:, 2] * rn_b - va[:, 2] * rn_a)
-        target = np.where(normal_velocity < -settings.restitution_threshold, -restitution * normal_velocity, 0.0)
+        normal_velocity = closing_speeds(velocity, a, b, nx, ny, rn_a, rn_b)
+        target = restitution_targets(normal_velocity, restitution, settings.restitution_threshold)
 
         # Last step's accumulated impulses, matched by feature id or position.
         point_keys = self._point_keys(manifolds)

@@ -91,9 +91,10 @@ import math
 import numpy as np
 
 from ..body import Body
+from ..body_state import BodyState
 from ..contact import Contact
 from ..solver.kernel import kernel
-from .contact_preparation import BACKENDS, ContactPreparation
+from .contact_preparation import BACKENDS, ContactPreparation, PreparedContacts, closing_speeds, restitution_targets
 from .solver_settings import ORDERS, POSITION_CORRECTIONS, SolverSettings, SolverStats
 
 # The settings and figures live in solver_settings.py (the soft step reads them too).
@@ -166,18 +167,58 @@ class ContactSolver(ContactPreparation):
         >>> a.velocity.tolist(), b.velocity.tolist()
         ([-2.0, 0.0], [2.0, 0.0])
         """
-        settings = self.settings
-        if not dt > 0.0:
-            raise ValueError(f"dt must be > 0 s, got {dt}")
-        accumulate = settings.accumulate_impulses
+        self.begin_step(bodies, manifolds, dt)
+        c = self._contacts
+        self.write_velocities(c, self._solve_velocities(c, c.velocity, dt))
+        self.end_step(None, dt)
+
+    # The stages of the world's step (the soft step's solver has the same three) ----
+    def begin_step(self, bodies: list[Body], manifolds: list[tuple[int, int, Contact]], h: float) -> None:
+        """Prepare the contacts of a (sub-)step of ``h`` (s): steps 1 and 2 of the module
+        docstring and the recalled impulses (applied by :meth:`solve_substep`)."""
+        if not h > 0.0:
+            raise ValueError(f"dt must be > 0 s, got {h}")
         self._pseudo_velocities = {}
-        c = self.prepare(bodies, manifolds, dt, block_solver=settings.block_solver)
+        self._pseudo_total = 0.0
+        self._bodies, self._manifolds = bodies, manifolds
+        self._contacts = self.prepare(bodies, manifolds, h, block_solver=self.settings.block_solver)
+
+    def solve_substep(self, state: BodyState, h: float, use_bias: bool) -> None:
+        """``use_bias``: the velocity pass on ``state`` (warm start, sweeps, split
+        impulses; after gravity, before positions move); otherwise the position
+        correction (:meth:`finish_step`; after positions moved)."""
+        if not use_bias:
+            self.finish_step(self._bodies, self._manifolds, h)
+            return
+        c = self._contacts
+        rows = np.array(list(c.local), dtype=int)           # world index of each member
+        velocity = state.velocity[rows]
+        if not self.settings.rotation:
+            velocity[:, 2] = 0.0
+        velocity = self._solve_velocities(c, velocity, h)
+        moves = state.dynamic[rows]
+        turns = moves & (c.inverse_inertia > 0.0)
+        state.velocity[rows[moves], :2] = velocity[moves, :2]
+        state.velocity[rows[turns], 2] = velocity[turns, 2]
+
+    def end_step(self, state: BodyState | None, h: float) -> None:
+        """Remember the impulses for the next step's warm start; fill :attr:`stats`."""
+        self.end_contacts(self._contacts, h, total_pseudo_impulse=self._pseudo_total)
+
+    def _solve_velocities(self, c: PreparedContacts, velocity: np.ndarray, dt: float) -> np.ndarray:
+        """Steps 3 to 5 of the module docstring on the members' ``velocity`` rows; returns
+        the new rows (the restitution targets come from ``velocity``: the closing speeds
+        after this step's forces, as box2d-lite measures them)."""
+        settings = self.settings
+        accumulate = settings.accumulate_impulses
         # The target separating speed: restitution, or the Baumgarte bias if larger.
         position_bias = self.position_bias(c.depth, dt)
-        target = c.target
+        nx, ny = c.normal[:, 0], c.normal[:, 1]
+        normal_velocity = closing_speeds(velocity, c.a, c.b, nx, ny, c.columns["rn_a"], c.columns["rn_b"])
+        target = restitution_targets(normal_velocity, c.restitution, settings.restitution_threshold)[c.order]
         if settings.position_correction == "baumgarte":
             target = np.maximum(target, position_bias[c.order])
-        velocity = self.apply_impulses(c, c.velocity, c.normal_total, c.tangent_total)   # 3. warm start
+        velocity = self.apply_impulses(c, velocity, c.normal_total, c.tangent_total)   # 3. warm start
 
         # 4. Velocity sweeps, manifold by manifold in sweep order: the solver kernel with
         # rigid rows (mass scale 1, impulse scale 0) and Box2D v2's order (friction first).
@@ -189,23 +230,18 @@ class ContactSolver(ContactPreparation):
         c.normal_total[c.order], c.tangent_total[c.order] = sweep_normal, sweep_tangent
 
         # 5. Split impulse: the same sweeps on pseudo-velocities, no friction, no warm start.
-        pseudo_total = 0.0
         if settings.position_correction == "split_impulse" and c.point_count:
             pseudo_impulse = np.zeros(c.point_count)
             pseudo_velocity = np.zeros_like(velocity)
             solve_constraints(pseudo_velocity, c.rows, settings.iterations, pseudo_impulse, np.zeros(c.point_count),
                               position_bias[c.order], rigid, no_softness, accumulate=accumulate,
                               friction_first=accumulate, use_friction=False)
-            pseudo_total = float(pseudo_impulse.sum())
+            self._pseudo_total = float(pseudo_impulse.sum())
             self._pseudo_velocities = {index: tuple(pseudo_velocity[k].tolist())
                                        for index, k in c.local.items() if not c.members[k].is_static}
-
-        # 6. Write back, remember the impulses for warm starting, report.
-        self.write_velocities(c, velocity)
         self._poses_at_solve = {index: (*c.centre[k].tolist(), float(c.members[k].angle))
                                 for index, k in c.local.items()}
-        self.end_contacts(c, dt, total_pseudo_impulse=pseudo_total)
-
+        return velocity
 
     def position_bias(self, depth: np.ndarray, dt: float) -> np.ndarray:
         """Separating speed (m/s) that removes ``baumgarte`` of the overlap beyond

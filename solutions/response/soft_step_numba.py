@@ -1,6 +1,6 @@
-"""The soft step compiled whole, for worlds of boxes: the twin of :meth:`World.soft_step`.
+"""The soft step compiled whole, for worlds of boxes: the twin of :meth:`World.step`'s soft step.
 
-:meth:`solutions.world.World.soft_step` is the teaching text: broad phase, speculative
+:meth:`solutions.world.World.step` with ``soft_step`` is the teaching text: broad phase, speculative
 narrow phase, prestep, warm start, soft solve and relax per sub-step, restitution and
 the impulse memory, each stage readable on its own.  Each stage builds Python objects
 (shapes, contacts, dictionaries of remembered impulses), and on a 20-base pyramid
@@ -604,7 +604,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
 
 
 class CompiledSoftStep:
-    """:meth:`World.soft_step` compiled whole, for a world of boxes or of discs (module docstring).
+    """The soft step of :meth:`World.step` compiled whole, for a world of boxes or of discs (module docstring).
 
     Holds the bodies' constant array (half-extents or radius, inverse masses and
     inertias, friction, restitution; columns ``BODY_*``), the joints as arrays with

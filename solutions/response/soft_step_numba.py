@@ -391,10 +391,15 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
         if found[k]:
             g_count += 1
             p_count += count[k]
-    man_pair, man_count, man_first = np.empty(g_count, np.int64), np.empty(g_count, np.int64), np.empty(g_count, np.int64)
-    a, b = np.empty(p_count, np.int64), np.empty(p_count, np.int64)
-    nx, ny, px, py, sep = np.empty(p_count), np.empty(p_count), np.empty(p_count), np.empty(p_count), np.empty(p_count)
-    feature, pair_key = np.empty(p_count, np.int64), np.empty(p_count, np.int64)
+    # Each array below is a row of one of a few blocks: one allocation per block, not per
+    # array (allocations were half the cost of a step of a small world).
+    group_ints = np.empty((9, g_count), np.int64)
+    man_pair, man_count, man_first = group_ints[0], group_ints[1], group_ints[2]
+    point_ints = np.empty((6, p_count), np.int64)
+    a, b, feature, pair_key = point_ints[0], point_ints[1], point_ints[2], point_ints[3]
+    points_in_order = np.empty((27, p_count))      # manifold order
+    nx, ny, px, py, sep = (points_in_order[0], points_in_order[1], points_in_order[2], points_in_order[3],
+                           points_in_order[4])
     g = 0
     p = 0
     for k in range(m):
@@ -413,16 +418,16 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
 
     # 3. The prestep (ContactPreparation.prepare and SoftStepSolver.begin_step).
     # Without rotation the contacts see no inertia and no angular velocity.
-    contact_inertia = inverse_inertia if rotation else np.zeros(n)
+    body_floats = np.zeros((4, n))
+    contact_inertia = inverse_inertia if rotation else body_floats[0]
+    start_angle, body_cos_less_1, body_sin = body_floats[1], body_floats[2], body_floats[3]
+    start_angle[:] = angle
     centre = position.copy()
-    start_angle = angle.copy()
-    depth = np.empty(p_count)
-    rn_a, rn_b, rt_a, rt_b = np.empty(p_count), np.empty(p_count), np.empty(p_count), np.empty(p_count)
-    r_dot_n_a, r_dot_n_b = np.empty(p_count), np.empty(p_count)
-    ima, imb, iia, iib = np.empty(p_count), np.empty(p_count), np.empty(p_count), np.empty(p_count)
-    mass_normal, mass_tangent = np.empty(p_count), np.empty(p_count)
-    mu, restitution, normal_velocity = np.empty(p_count), np.empty(p_count), np.empty(p_count)
-    rax, ray, rbx, rby = np.empty(p_count), np.empty(p_count), np.empty(p_count), np.empty(p_count)
+    column = points_in_order
+    depth, rn_a, rn_b, rt_a, rt_b = column[5], column[6], column[7], column[8], column[9]
+    r_dot_n_a, r_dot_n_b, ima, imb, iia, iib = column[10], column[11], column[12], column[13], column[14], column[15]
+    mass_normal, mass_tangent, mu, restitution = column[16], column[17], column[18], column[19]
+    normal_velocity, rax, ray, rbx, rby = column[20], column[21], column[22], column[23], column[24]
     for k in range(p_count):
         i, j = a[k], b[k]
         depth[k] = -sep[k]
@@ -444,7 +449,9 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
         wi, wj = (velocity[i, 2], velocity[j, 2]) if rotation else (0.0, 0.0)
         normal_velocity[k] = ((velocity[j, 0] - velocity[i, 0]) * nx[k] + (velocity[j, 1] - velocity[i, 1]) * ny[k]
                               + wj * rn_b[k] - wi * rn_a[k])
-    normal_total, tangent_total = np.zeros(p_count), np.zeros(p_count)
+    normal_total, tangent_total = column[25], column[26]
+    normal_total[:] = 0.0
+    tangent_total[:] = 0.0
     if warm_start:
         _recall(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_normal, old_tangent,
                 man_first, man_count, match_distance, normal_total, tangent_total)
@@ -458,16 +465,16 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
                 warm_started += 1
 
     # The rows in sweep order (ContactPreparation._sweep_rows).
-    movable = np.empty(n, dtype=np.bool_)
+    body_flags = np.zeros((2, n), dtype=np.bool_)
+    movable, in_contact = body_flags[0], body_flags[1]
     for i in range(n):
         movable[i] = inverse_mass[i] + contact_inertia[i] > 0.0
-    body_a, body_b = np.empty(g_count, np.int64), np.empty(g_count, np.int64)
+    body_a, body_b = group_ints[3], group_ints[4]
     for q in range(g_count):
         body_a[q], body_b[q] = man_pair[q] // n, man_pair[q] % n
     manifold_order = _sweep_order(body_a, body_b, movable, colours)
-    order = np.empty(p_count, np.int64)
-    first = np.empty(g_count, np.int64)
-    row_count = np.empty(g_count, np.int64)
+    order, sweep_position = point_ints[4], point_ints[5]
+    first, row_count = group_ints[5], group_ints[6]
     r = 0
     for q in range(g_count):
         src = manifold_order[q]
@@ -475,10 +482,11 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
         for s in range(man_count[src]):
             order[r] = man_first[src] + s
             r += 1
-    g_a, g_b, g_nx, g_ny = np.empty(g_count, np.int64), np.empty(g_count, np.int64), np.empty(g_count), np.empty(g_count)
-    g_ima, g_imb, g_iia, g_iib = np.empty(g_count), np.empty(g_count), np.empty(g_count), np.empty(g_count)
+    g_a, g_b = group_ints[7], group_ints[8]
+    group_floats = np.zeros((9, g_count))
+    g_nx, g_ny, g_ima, g_imb, g_iia = group_floats[0], group_floats[1], group_floats[2], group_floats[3], group_floats[4]
+    g_iib, k11, k12, k22 = group_floats[5], group_floats[6], group_floats[7], group_floats[8]
     block = np.zeros(g_count, dtype=np.bool_)
-    k11, k12, k22 = np.zeros(g_count), np.zeros(g_count), np.zeros(g_count)
     for q in range(g_count):
         k1 = order[first[q]]
         g_a[q], g_b[q], g_nx[q], g_ny[q] = a[k1], b[k1], nx[k1], ny[k1]
@@ -491,30 +499,27 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
             if block_solver and max(c11, c22) ** 2 < MAX_CONDITION_NUMBER * (c11 * c22 - c12 * c12):
                 block[q] = True
                 k11[q], k12[q], k22[q] = c11, c12, c22
-    s_rn_a, s_rn_b, s_rt_a, s_rt_b = rn_a[order], rn_b[order], rt_a[order], rt_b[order]
-    s_mass_normal, s_mass_tangent, s_mu = mass_normal[order], mass_tangent[order], mu[order]
-    lower = np.zeros(p_count)
-    normal_s, tangent_s = normal_total[order], tangent_total[order]
-    bias_rate, mass_scale_soft, impulse_scale_soft = np.empty(p_count), np.empty(p_count), np.empty(p_count)
+    rows_in_sweep_order = np.zeros((19, p_count))
+    row = rows_in_sweep_order
+    s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal = row[0], row[1], row[2], row[3], row[4]
+    s_mass_tangent, s_mu, lower, normal_s, tangent_s = row[5], row[6], row[7], row[8], row[9]
+    bias_rate, mass_scale_soft, impulse_scale_soft, max_normal = row[10], row[11], row[12], row[13]
+    separation, target, mass_scale, impulse_scale, zeros = row[14], row[15], row[16], row[17], row[18]
     for r in range(p_count):
         k = order[r]
+        s_rn_a[r], s_rn_b[r], s_rt_a[r], s_rt_b[r] = rn_a[k], rn_b[k], rt_a[k], rt_b[k]
+        s_mass_normal[r], s_mass_tangent[r], s_mu[r] = mass_normal[k], mass_tangent[k], mu[k]
+        normal_s[r], tangent_s[r] = normal_total[k], tangent_total[k]
         coefficients = stiff if (ima[k] == 0.0 or imb[k] == 0.0) else soft
         bias_rate[r], mass_scale_soft[r], impulse_scale_soft[r] = coefficients[0], coefficients[1], coefficients[2]
-    max_normal = np.zeros(p_count)
-    sweep_position = np.empty(p_count, np.int64)       # manifold order -> sweep order
-    for r in range(p_count):
-        sweep_position[order[r]] = r
-    in_contact = np.zeros(n, dtype=np.bool_)
+        sweep_position[k] = r                       # manifold order -> sweep order
     for k in range(p_count):
         in_contact[a[k]] = in_contact[b[k]] = True
     static_members = np.flatnonzero(in_contact & ~dynamic)
 
     # 4. The sub-steps.
-    separation = sep.copy()          # manifold order; the start's for the first biased pass
+    separation[:] = sep              # manifold order; the start's for the first biased pass
     separation_is_current = True     # (later: the relax pass's, or computed again without relax)
-    target, mass_scale, impulse_scale = np.empty(p_count), np.empty(p_count), np.empty(p_count)
-    zeros = np.zeros(p_count)
-    body_cos_less_1, body_sin = np.empty(n), np.empty(n)
     joint_work = _joint_rows(joint_a.shape[0])
     for _ in range(substeps):
         for i in range(n):

@@ -48,8 +48,8 @@ class Body:
     """A rigid body; see the module docstring for units and conventions.
 
     Its pose and velocities live in one row (its slot) of a
-    :class:`~solutions.body_state.BodyState`: its own until a
-    :class:`~solutions.world.World` gathers it into the world's state.  Reading
+    :class:`~exercises.body_state.BodyState`: its own until a
+    :class:`~exercises.world.World` gathers it into the world's state.  Reading
     ``position`` or ``velocity`` gives a copy of the row (what the body was doing
     then); assigning them, ``body.velocity = v`` or ``body.velocity += dv``, writes the
     row.  Changing one item of the copy (``body.velocity[0] = 0``) changes only the copy.

@@ -2,9 +2,9 @@
 # Handed out with the course; generated from solutions/body_state.py on the instructor's side.
 """The one body state: poses and velocities of a world's bodies as arrays.
 
-A :class:`~solutions.body.Body` does not hold its own position or velocity: it is a
+A :class:`~exercises.body.Body` does not hold its own position or velocity: it is a
 handle on one row (its *slot*) of a :class:`BodyState`.  A body made on its own gets a
-state of one row; a :class:`~solutions.world.World` gathers its bodies into one state
+state of one row; a :class:`~exercises.world.World` gathers its bodies into one state
 of ``n`` rows and binds each body to its row, so that every stage of the step (and the
 compiled twins) reads and writes the same arrays, and ``body.position`` always says
 where the world has put the body.  Nothing is copied between stages.

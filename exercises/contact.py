@@ -15,7 +15,7 @@ A :class:`Contact` between shape A and shape B holds
   key on the next step, which is what warm starting matches.  ``None`` when unknown;
 - ``separations``: (k,) signed separation at each point (m, > 0 still apart, <= 0
   overlapping): the given depths negated before they are clamped at 0, so a
-  speculative point (:mod:`~solutions.narrowphase.speculative`, given a negative
+  speculative point (:mod:`~exercises.narrowphase.speculative`, given a negative
   depth) keeps how far apart it is while ``depths`` keeps the conventions above.
 
 Moving B by ``depth * normal`` (or A by the opposite) separates the shapes.

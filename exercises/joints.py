@@ -16,7 +16,7 @@ until the anchors' relative velocity along ``u`` is zero (plus a position bias).
 
 :class:`JointSolver` runs the velocity iterations over all joints, with warm starting
 (the accumulated impulses of the last step are applied first); each joint is a row
-of the same solver kernel as the contacts (:mod:`solutions.solver.kernel`).  The world solves
+of the same solver kernel as the contacts (:mod:`exercises.solver.kernel`).  The world solves
 joints after contacts in each step.  Units: SI.
 """
 from __future__ import annotations
@@ -77,7 +77,7 @@ def spring_coefficients(mass: float, frequency: float, damping_ratio: float) -> 
 
 class JointSolver:
     """Sequential impulses over distance joints, with warm starting: each joint is one
-    constraint row of the solver kernel (:func:`~solutions.solver.kernel.solve_constraints`),
+    constraint row of the solver kernel (:func:`~exercises.solver.kernel.solve_constraints`),
     bilateral (its impulse may pull as well as push), without friction.
 
     Parameters
@@ -110,7 +110,7 @@ class JointSolver:
 
         - rigid rod, Baumgarte: ``target = -beta / dt * C``, scales ``(1, 0)``;
         - rigid rod in the soft step (``softness = (bias_rate, mass_scale,
-          impulse_scale)`` of :func:`~solutions.response.soft_step.soft_coefficients`):
+          impulse_scale)`` of :func:`~exercises.response.soft_step.soft_coefficients`):
           ``target = -bias_rate * C`` with those scales: a stiff spring instead of a
           Baumgarte rod;
         - spring joint (``frequency > 0``), Catto's soft constraint with ``gamma = 1 /

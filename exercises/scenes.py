@@ -230,7 +230,7 @@ def friction_ramp(angle_deg: float = 30.0, frictions=(0.2, 0.4, 0.5, 0.7, 0.9)) 
 
 
 #: The recommended step of the hard scenes: Box2D v3's soft step with 8 sub-steps of one
-#: sweep each (:mod:`solutions.response.soft_step`).  At 60 Hz its contacts are springs of
+#: sweep each (:mod:`exercises.response.soft_step`).  At 60 Hz its contacts are springs of
 #: 120 Hz (240 Hz on static bodies), stiff enough that a 20-box stack sags less than
 #: 1 cm, and it finds contacts once per step: it costs about what the plain solver
 #: costs at 30 iterations on a stack and less on a pyramid (bench/bench_hard_cases.py).

@@ -3,10 +3,10 @@
 """Collision shapes: circle, AABB, OBB and convex polygon.
 
 Every shape is an immutable value in one frame: a body holds its shape in the body's
-local frame (``_local``) and :meth:`solutions.body.Body.world_shape` gives the same
+local frame (``_local``) and :meth:`exercises.body.Body.world_shape` gives the same
 shape in world coordinates (``_world``), which is what the narrow phase tests.
 
-Conventions (see :mod:`solutions`): SI units, y up, angles in radians counter-clockwise,
+Conventions (see :mod:`exercises`): SI units, y up, angles in radians counter-clockwise,
 polygon vertices counter-clockwise so that ``perp(edge) = (y, -x)`` points outwards.
 
 Invalid input raises ``ValueError`` with a message naming the problem: NaN or infinite

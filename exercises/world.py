@@ -22,27 +22,27 @@ of its steps::
 
 The two steps are two configurations of this outline:
 
-- the **plain step** (box2d-lite, Box2D v2; :class:`~solutions.response.contact_solver.ContactSolver`):
+- the **plain step** (box2d-lite, Box2D v2; :class:`~exercises.response.contact_solver.ContactSolver`):
   one sub-step per round of contacts, found again every sub-step; rigid rows, the
   restitution target and the Baumgarte bias inside the solve (restitution aims at the
   closing speeds after gravity, as box2d-lite measures them); bullets swept every
   sub-step;
-- the **soft step** (Box2D v3; :class:`~solutions.response.soft_step.SoftStepSolver`,
+- the **soft step** (Box2D v3; :class:`~exercises.response.soft_step.SoftStepSolver`,
   ``soft_step=True``): one round of speculative contacts per step and ``substeps``
   sub-steps on it; soft rows that push with a damped spring, a relax pass, a
   restitution pass at the end (from the closing speeds at the start); bullets swept
   once per step.
 
 Both solvers prepare their contacts with the same prestep
-(:class:`~solutions.response.contact_preparation.ContactPreparation`), and every pass
-of either is the same solver kernel (:mod:`solutions.solver.kernel`) with other
+(:class:`~exercises.response.contact_preparation.ContactPreparation`), and every pass
+of either is the same solver kernel (:mod:`exercises.solver.kernel`) with other
 targets, mass scales and impulse scales.  ``backend="numba"`` runs the soft step of a
 world of boxes or of discs compiled whole (:mod:`~solutions.response.soft_step_numba`).
 
 Every technique is a switch of :class:`WorldSettings`, of the solvers'
-:class:`~solutions.response.solver_settings.SolverSettings` or of the soft step's
-:class:`~solutions.response.solver_settings.SoftStepSettings`, so a learner can turn one
-off and watch what changes.  A scene (:mod:`solutions.scenes`) sets only what it needs.
+:class:`~exercises.response.solver_settings.SolverSettings` or of the soft step's
+:class:`~exercises.response.solver_settings.SoftStepSettings`, so a learner can turn one
+off and watch what changes.  A scene (:mod:`exercises.scenes`) sets only what it needs.
 Units: SI; ``gravity`` in m/s^2, ``dt`` in s.
 """
 from __future__ import annotations
@@ -132,7 +132,7 @@ class WorldSettings:
         With ``soft_step``: contacts are found once per step and each sub-step sweeps
         ``solver.iterations`` times, soft and then relaxed.
     soft_step : bool
-        Step as Box2D v3 does (:mod:`~solutions.response.soft_step`): soft contacts
+        Step as Box2D v3 does (:mod:`~exercises.response.soft_step`): soft contacts
         and relaxation inside the sub-steps, instead of ``solver.position_correction``.
     solver : SolverSettings
         Switches of the contact solvers (both steps).
@@ -142,7 +142,7 @@ class WorldSettings:
         ``"python"``: every stage in readable Python and numpy (the teaching text);
         ``"numba"``: the compiled twins of the solver kernel (contacts and joints,
         :mod:`solutions.solver.kernel_numba`), of the numpy grid broad phase
-        (:mod:`solutions.broadphase.grid_numba`) and of the box-pair manifolds of the
+        (:mod:`exercises.broadphase.grid_numba`) and of the box-pair manifolds of the
         soft step (:mod:`solutions.narrowphase.box_pairs_numba`), each tested equal to
         its readable version, and the world to 1e-12 on every hard scene.  Not a
         setting of the physics: both give the same motion, to rounding.

@@ -384,3 +384,18 @@ def test_instructor_only_modules_are_left_out(generated, tmp_path):
     (source / "mentions.py").write_text('"""Says ### INSTRUCTOR ONLY inline."""\ny = 2\n')
     made, _ = gen.generate(source)
     assert sorted(made) == ["mentions.py"]
+
+
+def test_cross_references_name_the_student_package_where_it_holds_the_module(generated):
+    """Docstrings of the student edition point at its own modules (``exercises.shapes``),
+    never at a reference module it holds; the twins it does not hold keep their name."""
+    files, _ = generated
+    reference_modules = {gen.module_name(p.relative_to(gen.REPO_ROOT / gen.SOURCE_PACKAGE).as_posix())
+                         for p in (gen.REPO_ROOT / gen.SOURCE_PACKAGE).rglob("*.py") if "__pycache__" not in p.parts}
+    held = {gen.module_name(relative) for relative in files}
+    named = [m.group(0) for text in files.values() for m in re.finditer(r"(?<![\w/.])solutions(?:\.\w+)+", text)]
+    for reference in named:
+        parts = reference.split(".")
+        module = next(".".join(parts[:k]) for k in range(len(parts), 0, -1) if ".".join(parts[:k]) in reference_modules)
+        assert module not in held, f"{reference} names a module the student edition holds"
+    assert any("exercises.shapes" in text for text in files.values())

@@ -98,6 +98,9 @@ HEADER_WIDTH = 100
 ABSOLUTE_IMPORT = re.compile(rf"^\s*(from|import)\s+{SOURCE_PACKAGE}\b")
 # Doctest lines import from the package by name; the student copy imports its own.
 DOCTEST_IMPORT = re.compile(rf"^(\s*(?:>>>|\.\.\.)\s+(?:from|import)\s+){SOURCE_PACKAGE}\b")
+# Cross-references in docstrings (``:mod:`solutions.shapes```, ``solutions.world.World``)
+# name a dotted path in the package, or the package itself as a role's target.
+CROSS_REFERENCE = re.compile(rf"(?<![\w/.]){SOURCE_PACKAGE}((?:\.[A-Za-z_]\w*)+)|(?<=:`){SOURCE_PACKAGE}(?=`)")
 
 
 class GeneratorError(ValueError):
@@ -270,6 +273,39 @@ def is_instructor_only(source: str) -> bool:
     return any(line.startswith(INSTRUCTOR_ONLY_MARKER) for line in source.splitlines())
 
 
+def module_name(relative: str) -> str:
+    """The dotted name of the reference module at ``relative`` (a path under solutions/).
+
+    >>> module_name("response/soft_step.py"), module_name("narrowphase/__init__.py")
+    ('solutions.response.soft_step', 'solutions.narrowphase')
+    """
+    return ".".join([SOURCE_PACKAGE, *Path(relative).with_suffix("").parts]).removesuffix(".__init__")
+
+
+def point_references_at_the_student_package(text: str, modules: dict[str, bool]) -> str:
+    """``text`` with every cross-reference into a module the student edition holds
+    renamed into the student package.  ``modules`` maps each reference module's dotted
+    name to whether it is handed out; a reference names the longest module that is a
+    prefix of it.  References to the instructor's own modules (the compiled twins)
+    keep their name, and prose is left alone.
+
+    >>> point_references_at_the_student_package(
+    ...     "see :func:`~solutions.shapes.polygon_vertices`, :mod:`solutions` and "
+    ...     ":mod:`solutions.response.twin`; the solutions of the LCP; solutions/shapes.py",
+    ...     {"solutions": True, "solutions.shapes": True, "solutions.response": True,
+    ...      "solutions.response.twin": False})
+    'see :func:`~exercises.shapes.polygon_vertices`, :mod:`exercises` and :mod:`solutions.response.twin`; the solutions of the LCP; solutions/shapes.py'
+    """
+    def renamed(match: re.Match) -> str:
+        parts = [SOURCE_PACKAGE, *(match.group(1) or "").split(".")[1:]]
+        named = next(".".join(parts[:k]) for k in range(len(parts), 0, -1) if ".".join(parts[:k]) in modules
+                     or k == 1)
+        held = modules.get(named, True)
+        return TARGET_PACKAGE + match.group(0)[len(SOURCE_PACKAGE):] if held else match.group(0)
+
+    return CROSS_REFERENCE.sub(renamed, text)
+
+
 def generate(source_dir: Path, exercises: dict | None = None) -> tuple[dict[str, str], list[StubbedFunction]]:
     """Every file of the student package, as {relative path: text}, and the stubs made.
 
@@ -284,17 +320,17 @@ def generate(source_dir: Path, exercises: dict | None = None) -> tuple[dict[str,
                              "To test your own exercises, run `grader check <exercise>`.")
     files: dict[str, str] = {}
     stubs: list[StubbedFunction] = []
-    for path in sources:
-        relative = path.relative_to(source_dir).as_posix()
-        text = path.read_text(encoding="utf-8")
+    texts = {path.relative_to(source_dir).as_posix(): path.read_text(encoding="utf-8") for path in sources}
+    modules = {module_name(relative): not is_instructor_only(text) for relative, text in texts.items()}
+    for relative, text in texts.items():
         if is_instructor_only(text):
             continue
         student, stubbed = strip_solutions(text, f"{SOURCE_PACKAGE}/{relative}",
                                            lambda qualname: exercise_of(relative, qualname, exercises))
+        student = point_references_at_the_student_package(student, modules)
         made = [exercise_of(relative, name, exercises) for name in stubbed]
         files[relative] = header(f"{SOURCE_PACKAGE}/{relative}", list(zip(stubbed, made))) + student
-        module = ".".join([TARGET_PACKAGE, *Path(relative).with_suffix("").parts])
-        module = module.removesuffix(".__init__")
+        module = TARGET_PACKAGE + module_name(relative).removeprefix(SOURCE_PACKAGE)
         stubs += [StubbedFunction(module, name, ex) for name, ex in zip(stubbed, made)]
     return files, stubs
 

@@ -5,7 +5,7 @@
 
 Row ``i`` is body ``i``'s world AABB ``[min_x, min_y, max_x, max_y]`` in metres.
 Boxes are closed: a box whose ``max_x`` equals another's ``min_x`` touches it, and
-touching boxes count as overlapping (the project's convention, see :mod:`solutions`).
+touching boxes count as overlapping (the project's convention, see :mod:`exercises`).
 Zero-size boxes (points and segments) are allowed.
 """
 from __future__ import annotations

@@ -4,7 +4,7 @@
 """Grid broad phase compiled with numba: the same pairs as the numpy grid, faster.
 
 :func:`pairs_grid_numba` is the compiled twin of
-:func:`solutions.broadphase.sorted_grid_numpy.pairs_grid_numpy`: the same horizontal
+:func:`exercises.broadphase.sorted_grid_numpy.pairs_grid_numpy`: the same horizontal
 strips of height ``cell_size`` swept along x, written as loops (numba compiles them
 to machine code) instead of whole-array steps.  Read that module for why the method
 is right; in short:
@@ -72,7 +72,7 @@ def pairs_grid_numba(aabbs, cell_size: float | None = None, margin: float = 0.0,
         Boxes ``[min_x, min_y, max_x, max_y]`` (m).
     cell_size : float, optional
         Height of a strip (m), finite and > 0.  None:
-        :func:`~solutions.broadphase.uniform_grid.suggest_cell_size` of the grown
+        :func:`~exercises.broadphase.uniform_grid.suggest_cell_size` of the grown
         boxes (twice their median extent), as the numpy grid would choose.  Any cell
         size gives the same pairs; it only changes the speed.
     margin : float, optional

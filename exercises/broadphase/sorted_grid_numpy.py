@@ -3,7 +3,7 @@
 # instructor's side.
 """Vectorised grid broad phase for large scenes (scaffolding, not a student exercise).
 
-The readable grid of :mod:`solutions.broadphase.uniform_grid` loops over square cells.
+The readable grid of :mod:`exercises.broadphase.uniform_grid` loops over square cells.
 This version replaces loops by whole-array numpy steps, on a grid of horizontal
 *strips* of height ``cell_size`` swept along x (a sort-and-sweep inside each strip):
 
@@ -67,7 +67,7 @@ def pairs_grid_numpy(aabbs, cell_size: float | None = None, *,
         Boxes ``[min_x, min_y, max_x, max_y]`` (m).
     cell_size : float, optional
         Height of a strip (m), finite and > 0.  None:
-        :func:`~solutions.broadphase.uniform_grid.suggest_cell_size` (twice the
+        :func:`~exercises.broadphase.uniform_grid.suggest_cell_size` (twice the
         median body extent).
     max_strips_per_body : int, optional
         Bodies overlapping more strips are handled by direct tests (>= 1).

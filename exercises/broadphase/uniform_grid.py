@@ -27,7 +27,7 @@ A body whose AABB spans several cells is handled in one of two ways:
 Either way a body that crosses a cell edge must meet bodies in the neighbouring
 cells too: "bodies only collide inside one group" is wrong for a grid (erratum 5).
 
-Both variants return exactly the pairs of :func:`~solutions.broadphase.brute_force.pairs_brute_force`:
+Both variants return exactly the pairs of :func:`~exercises.broadphase.brute_force.pairs_brute_force`:
 candidates found through the grid are filtered with the exact AABB test.
 """
 from __future__ import annotations

@@ -10,11 +10,11 @@ of a box is simply its ``[min, max]`` coordinates, so no dot product is needed. 
 boxes are apart if their intervals are apart on x or on y.
 
 Contact: the face of A with the least penetration is the reference face (faces
-numbered as in :mod:`solutions.shapes`: 0 faces -y, 1 +x, 2 +y, 3 -x; the first one wins
+numbered as in :mod:`exercises.shapes`: 0 faces -y, 1 +x, 2 +y, 3 -x; the first one wins
 a tie).  Faces of two AABBs are always parallel, so the manifold is the overlap of the
 two faces: 2 points (1 if the overlap is a single point, as when corners touch), on
 the line halfway between A's face and B's opposite face.  Feature ids use the same
-scheme as :func:`solutions.narrowphase.polygon_polygon.collide_polygon_polygon`
+scheme as :func:`exercises.narrowphase.polygon_polygon.collide_polygon_polygon`
 (``("A", reference face, incident face, B's vertex)``), which gives the same contact
 for two AABBs, except where the faces share a single point: that point keeps the id of
 the incident face's first vertex, ``(face + 2) % 4``.

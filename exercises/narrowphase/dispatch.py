@@ -4,7 +4,7 @@
 """One entry point for any pair of world shapes, in either order.
 
 ``shapes_overlap(a, b)`` answers yes/no with the cheapest SAT test for the pair;
-``collide(a, b)`` returns the :class:`~solutions.contact.Contact` (normal from A to B)
+``collide(a, b)`` returns the :class:`~exercises.contact.Contact` (normal from A to B)
 or None.  Both accept Circle, AABB, OBB and ConvexPolygon.  A polygon-circle pair is
 handled by the circle-polygon routine and the contact flipped, so the normal still
 points from ``a`` to ``b``.
@@ -45,8 +45,8 @@ def circle_reaches_polygon(circle: Circle, polygon: AABB | OBB | ConvexPolygon) 
     """Whether :func:`collide` finds a contact between a circle and a polygonal shape.
 
     The bounding boxes come first, as a cheap no (apart by more than the rounding
-    tolerance of the pair, :func:`~solutions.shapes.rounding_tolerance`); then
-    :func:`~solutions.narrowphase.circle_polygon.collide_circle_polygon` decides.
+    tolerance of the pair, :func:`~exercises.shapes.rounding_tolerance`); then
+    :func:`~exercises.narrowphase.circle_polygon.collide_circle_polygon` decides.
 
     >>> circle_reaches_polygon(Circle((4.0, 5.0), 5.0), AABB((-1.0, -1.0), (1.0, 1.0)))   # on the corner
     True

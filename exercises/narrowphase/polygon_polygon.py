@@ -6,7 +6,7 @@
 """Convex polygon against convex polygon: SAT test, OBB-OBB test and contact manifold.
 
 Works for every polygonal shape (AABB, OBB, ConvexPolygon) through
-:func:`solutions.shapes.polygon_vertices`.  Box vertex and edge numbering::
+:func:`exercises.shapes.polygon_vertices`.  Box vertex and edge numbering::
 
         3 ---------- 2        edge k runs from vertex k to vertex k+1
         |            |        edge 0 faces -y, 1 faces +x, 2 faces +y, 3 faces -x
@@ -69,7 +69,7 @@ def tolerance_scale(vertices_a, vertices_b) -> float | np.ndarray:
     """Length (m) whose :data:`KEEP_POINT_TOL` part is the pair's rounding tolerance.
 
     ``KEEP_POINT_TOL * tolerance_scale(a, b)`` is
-    :func:`~solutions.shapes.rounding_tolerance` of the pair: a few ulps of its largest
+    :func:`~exercises.shapes.rounding_tolerance` of the pair: a few ulps of its largest
     coordinate plus 1e-12 of its size (the larger extent of the two polygons).  So the
     tolerances follow the shapes: centimetre boxes get 1e-14 m at the origin and 1.8e-6 m
     at x = 1e9 m (where a coordinate is only known to 1.2e-7 m), never millimetres.
@@ -195,7 +195,7 @@ def obbs_overlap(a: OBB | AABB, b: OBB | AABB) -> bool:
 
     A box's four edge normals are ``perp(v1 - v0)``, ``perp(v2 - v1)`` and their
     opposites; an axis and its opposite give the same test, so the box's unit x and y
-    axes (:func:`solutions.narrowphase.projection.box_axes`) are enough.  They are taken
+    axes (:func:`exercises.narrowphase.projection.box_axes`) are enough.  They are taken
     from the angle so that a zero-width box still has two axes.  Min and max start at
     ``+inf`` and ``-inf`` for each axis (see :func:`project_vertices`).
 

@@ -3,7 +3,7 @@
 # instructor's side.
 """Speculative manifolds: contact points of polygons that touch, overlap, or nearly touch.
 
-The soft step (:mod:`solutions.response.soft_step`) finds contacts once per step and
+The soft step (:mod:`exercises.response.soft_step`) finds contacts once per step and
 moves the bodies several times before it looks again.  A box resting on a face then
 needs both of its corners in the manifold even when one of them has lifted by a
 hair: without that corner the box pivots on the other one and the stack rocks.  So,
@@ -13,9 +13,9 @@ overlapping); the solver lets a point with separation ``s > 0`` close at ``s / h
 and no faster, so a speculative point never pulls.
 
 The reference and incident faces follow
-:func:`~solutions.narrowphase.polygon_polygon.collide_polygon_polygon` (the same
+:func:`~exercises.narrowphase.polygon_polygon.collide_polygon_polygon` (the same
 helpers and tolerances) and the clipping is its own,
-:func:`~solutions.narrowphase.polygon_polygon.reference_face_manifold`, with points
+:func:`~exercises.narrowphase.polygon_polygon.reference_face_manifold`, with points
 kept up to ``margin`` above the reference face instead of 0.  One difference: A
 keeps the reference role unless B's face is clearly better, without
 ``collide_polygon_polygon``'s second look when A's manifold misses B's deepest vertex
@@ -53,7 +53,7 @@ def speculative_polygon_manifold(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | 
     Contact or None
         The contact: its ``separations`` are each point's signed separation (m, > 0
         apart) and its ``depths`` their overlaps, clamped at 0, as the
-        :class:`~solutions.contact.Contact` conventions ask.  None when a face
+        :class:`~exercises.contact.Contact` conventions ask.  None when a face
         separates the shapes by more than ``margin`` or no point is that close.
 
     Examples

@@ -11,6 +11,6 @@
 - :mod:`.contact_solver`: sequential impulses over many contacts (the iterative
   solver real engines use), with switches to turn each technique on and off.
 
-Conventions as in :mod:`solutions`: SI units; a contact's normal points from body A to
+Conventions as in :mod:`exercises`: SI units; a contact's normal points from body A to
 body B; an impulse ``P`` (N s) is applied as ``+P`` to B and ``-P`` to A.
 """

@@ -6,7 +6,7 @@
 :class:`ContactPreparation` gathers the bodies in contact and pre-computes, for every
 contact point at once, what the solver kernel needs (lever arms, effective masses,
 pair coefficients, the restitution target), puts the points in sweep order as
-:class:`~solutions.solver.constraint_rows.ConstraintRows`, recalls last step's
+:class:`~exercises.solver.constraint_rows.ConstraintRows`, recalls last step's
 impulses for warm starting and, after the solve, remembers this step's.  The plain
 step (:class:`~.contact_solver.ContactSolver`) and the soft step
 (:class:`~.soft_step.SoftStepSolver`) each build on it; neither inherits the other.
@@ -27,7 +27,7 @@ from ..made_when_asked import MadeWhenAsked
 from ..twins import require_twins
 from .solver_settings import SolverSettings, SolverStats
 
-#: The twins of the solver kernel (:func:`solutions.solver.kernel.kernel`).
+#: The twins of the solver kernel (:func:`exercises.solver.kernel.kernel`).
 BACKENDS = ("python", "numba")
 
 def closing_speeds(velocity: np.ndarray, a: np.ndarray, b: np.ndarray, nx: np.ndarray, ny: np.ndarray,
@@ -65,7 +65,7 @@ class PreparedContacts:
     ``restitution``, ``normal_velocity`` before any impulse (m/s), warm-start keys and
     the accumulated impulses ``normal_total``, ``tangent_total`` (N s).  ``columns``
     holds the per-point arrays of the prestep in manifold order; ``rows`` the kernel's
-    rows (:class:`~solutions.solver.constraint_rows.ConstraintRows`) in sweep order,
+    rows (:class:`~exercises.solver.constraint_rows.ConstraintRows`) in sweep order,
     ``order`` maps a sweep position to its index in manifold order, and ``target``
     is the restitution target of each point in sweep order (m/s; 0 below the threshold).
     """
@@ -109,7 +109,7 @@ class ContactPreparation:
         Switches and constants; the defaults follow box2d-lite.
     backend : str
         Which twin of the solver kernel runs the sweeps: ``"python"``, the readable
-        loop of :mod:`solutions.solver.kernel` (the teaching version), or ``"numba"``,
+        loop of :mod:`exercises.solver.kernel` (the teaching version), or ``"numba"``,
         the same loop compiled (:mod:`solutions.solver.kernel_numba`, tested equal to
         1e-12; numba is imported only when asked for).  Not a setting of the physics:
         both give the same motion.

@@ -60,16 +60,16 @@ What ``solve`` does, in order
    feature the pair did not have, by the nearest old point of the pair within
    ``warm_start_match_distance``), scaled by ``dt / previous dt``.
 4. ``iterations`` sweeps, manifold by manifold: the solver kernel
-   (:func:`~solutions.solver.kernel.solve_constraints`) with rigid rows.  Per
+   (:func:`~exercises.solver.kernel.solve_constraints`) with rigid rows.  Per
    manifold, the friction impulse of each point, then the normal impulses: the two of
    a two-point manifold together as one 2x2 linear complementarity problem (the block
-   solver of Box2D, :func:`~solutions.solver.kernel.block_normal_impulses`;
+   solver of Box2D, :func:`~exercises.solver.kernel.block_normal_impulses`;
    ``block_solver=False`` or an ill-conditioned pair solves them one after the other).
    With ``accumulate_impulses`` the running totals are clamped (normal >= 0, friction
    within ``+-mu`` times the normal total so far), so a sweep can take back what an
    earlier one overdid; without it each increment is clamped, impulses can only grow,
    and each point's friction follows its normal.  The manifolds are visited in the
-   order of :func:`~solutions.solver.sweep_order.sweep_order`: as given
+   order of :func:`~exercises.solver.sweep_order.sweep_order`: as given
    (``order="manifolds"``: one sweep carries an impulse through a whole stack) or
    colour by colour (``"colours"``).
    ``backend`` chooses the readable loop or its compiled twin (equal to 1e-12).

@@ -44,9 +44,9 @@ point that has opened (``s > 0``) may close at up to ``s / h`` and is rigid.  Co
 against static bodies use twice the frequency (they must carry whole stacks).  The
 frequency is capped at a quarter of the sub-step rate, ``1 / (4 h)``, where implicit
 Euler stays accurate.  Settings: ``contact_hertz``, ``contact_damping_ratio`` and
-``relax`` of :class:`~solutions.response.solver_settings.SoftStepSettings`, and
+``relax`` of :class:`~exercises.response.solver_settings.SoftStepSettings`, and
 ``max_push_velocity`` and ``iterations`` (sweeps per pass) of
-:class:`~solutions.response.solver_settings.SolverSettings`.
+:class:`~exercises.response.solver_settings.SolverSettings`.
 
 Each sweep solves every manifold's normal impulses and then its friction impulses
 (Box2D v3's order), the friction bounded by ``mu`` times the accumulated normal
@@ -108,10 +108,10 @@ def soft_coefficients(hertz: float, damping_ratio: float, h: float) -> tuple[flo
 
 
 class SoftStepSolver(ContactPreparation):
-    """Contact solver of the soft step; :class:`~solutions.world.World` drives it.
+    """Contact solver of the soft step; :class:`~exercises.world.World` drives it.
 
     Calling contract, per step of ``dt`` with ``n`` sub-steps of ``h``, on the
-    :class:`~solutions.body_state.BodyState` that the bodies are rows of::
+    :class:`~exercises.body_state.BodyState` that the bodies are rows of::
 
         solver.begin_step(bodies, manifolds, h)
         for _ in range(n):
@@ -121,7 +121,7 @@ class SoftStepSolver(ContactPreparation):
             solver.solve_substep(state, h, use_bias=False)    # relax (if soft.relax)
         solver.end_step(state, h)                              # restitution, memory, stats
 
-    Every pass is the solver kernel (:func:`~solutions.solver.kernel.solve_constraints`)
+    Every pass is the solver kernel (:func:`~exercises.solver.kernel.solve_constraints`)
     with soft or rigid rows, in Box2D v3's order (normal, then friction).
 
     Examples
@@ -154,7 +154,7 @@ class SoftStepSolver(ContactPreparation):
         """Prepare the contacts found at the start of the step for sub-steps of ``h`` (s).
 
         Each point starts from its contact's signed separation (``Contact.separations``,
-        m, > 0 for the speculative points of :mod:`~solutions.narrowphase.speculative`).
+        m, > 0 for the speculative points of :mod:`~exercises.narrowphase.speculative`).
         """
         settings = self.settings
         if not h > 0.0:

@@ -56,15 +56,15 @@ class SolverSettings:
     block_solver : bool
         Solve the two normal impulses of a two-point manifold together, as one 2x2
         linear complementarity problem (Box2D's block solver,
-        :func:`~solutions.solver.kernel.block_normal_impulses`), instead of one point
+        :func:`~exercises.solver.kernel.block_normal_impulses`), instead of one point
         after the other.  A face resting on a face then gets both impulses right in
         one go, without the spurious turn a point-by-point solve leaves behind.
         Manifolds whose 2x2 matrix is ill-conditioned
-        (:data:`~solutions.solver.constraint_rows.MAX_CONDITION_NUMBER`) are solved
+        (:data:`~exercises.solver.constraint_rows.MAX_CONDITION_NUMBER`) are solved
         point by point anyway.
     order : str
         The order in which the sweeps visit the manifolds
-        (:func:`~solutions.solver.sweep_order.sweep_order`): ``"manifolds"`` (as
+        (:func:`~exercises.solver.sweep_order.sweep_order`): ``"manifolds"`` (as
         found: one sweep carries an impulse through a whole stack) or ``"colours"``
         (colour by colour: the batches a parallel solver would solve at once; an
         impulse then travels about one contact per colour and sweep, so a stack sinks

@@ -6,6 +6,6 @@ impulses, rigid or soft) and its compiled twin, and the order in which it visits
 - :mod:`.constraint_rows`: what the kernel needs of each contact point and joint.
 - :mod:`.kernel`: :func:`~.kernel.solve_constraints`, the readable loop (the teaching text).
 - ``kernel_numba``: the same loop compiled by numba (imported only when asked for; on
-  the instructor's side only, :mod:`solutions.twins`).
+  the instructor's side only, :mod:`exercises.twins`).
 - :mod:`.sweep_order`: the Gauss-Seidel order of the groups.
 """

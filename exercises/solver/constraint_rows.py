@@ -7,8 +7,8 @@ A *row* is one scalar velocity constraint between two bodies A and B along a uni
 direction ``n``: a contact point's non-penetration (with its friction along the
 tangent ``t = (n_y, -n_x)``) or a distance joint's axis.  Rows are grouped: the one or
 two points of a contact manifold share their bodies and normal (a group), a joint is
-a group of one row.  The kernel (:mod:`solutions.solver.kernel`) visits the groups in
-their stored order, which is the sweep order (:func:`solutions.solver.sweep_order.sweep_order`).
+a group of one row.  The kernel (:mod:`exercises.solver.kernel`) visits the groups in
+their stored order, which is the sweep order (:func:`exercises.solver.sweep_order.sweep_order`).
 
 Symbols: ``rn = r x n`` and ``rt = r x t`` for the lever arm ``r`` from a body's
 centre of mass to the point (m); ``K_n = 1/m_A + 1/m_B + rn_A^2 / I_A + rn_B^2 / I_B``

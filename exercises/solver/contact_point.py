@@ -5,7 +5,7 @@
 """One contact point, visited once by sequential impulses: its normal impulse and its
 friction impulse, each with accumulated clamping.
 
-The solver kernel (:func:`solutions.solver.kernel.solve_constraints`) sweeps over the
+The solver kernel (:func:`exercises.solver.kernel.solve_constraints`) sweeps over the
 contact points of all manifolds again and again; at each point it calls the two
 functions below, which are the heart of sequential impulses (Erin Catto's box2d-lite,
 Box2D, Chipmunk):

@@ -5,7 +5,7 @@
 One function, :func:`solve_constraints`, solves every velocity constraint of the
 engine: contact points (non-penetration and friction) and distance joints, rigid or
 soft, in the plain step and in the soft step.  What differs between those uses is
-only its parameters (:mod:`solutions.solver.constraint_rows` explains the rows):
+only its parameters (:mod:`exercises.solver.constraint_rows` explains the rows):
 
 ==========================  ==========================  ============================
 use                         ``target`` (m/s)            ``mass_scale``, ``impulse_scale``

@@ -18,7 +18,7 @@ def sweep_order(body_a: np.ndarray, body_b: np.ndarray, movable: np.ndarray,
 
     The manifolds of one batch share no movable body, so they can be solved at the
     same time (a parallel or vectorised solver may) with the same result as one after
-    the other (:func:`solutions.solver.kernel.solve_constraints` visits them in this order).  Static bodies may appear in many manifolds of one batch:
+    the other (:func:`exercises.solver.kernel.solve_constraints` visits them in this order).  Static bodies may appear in many manifolds of one batch:
     their velocity never changes.
 
     - ``"manifolds"``: Gauss-Seidel in the given order, as Box2D and box2d-lite sweep

@@ -142,7 +142,7 @@ class WorldSettings:
         ``"python"``: every stage in readable Python and numpy (the teaching text);
         ``"numba"``: the compiled twins of the solver kernel (contacts and joints,
         :mod:`solutions.solver.kernel_numba`), of the numpy grid broad phase
-        (:mod:`exercises.broadphase.grid_numba`) and of the box-pair manifolds of the
+        (:mod:`solutions.broadphase.grid_numba`) and of the box-pair manifolds of the
         soft step (:mod:`solutions.narrowphase.box_pairs_numba`), each tested equal to
         its readable version, and the world to 1e-12 on every hard scene.  Not a
         setting of the physics: both give the same motion, to rounding.

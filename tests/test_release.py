@@ -187,11 +187,14 @@ def test_student_folder_layout(release):
     run_sh = (student / "run.sh").read_text()
     for command in ("setup)", "check)", "lab)", "submit)", "ipykernel install", "pip install"):
         assert command in run_sh, command
-    # pyproject: the repository's pins, pytest's, JupyterLab 4 and the kernel packages.
+    # pyproject: the repository's pins but those only the instructor's side imports (the
+    # compiled twins' numba and llvmlite, the batch grader's tqdm), pytest's, JupyterLab 4
+    # and the kernel packages.
     ours = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
     theirs = tomllib.loads((student / "pyproject.toml").read_text())
     dependencies = theirs["project"]["dependencies"]
-    assert set(ours["dependencies"]) <= set(dependencies)
+    left_out = {r for r in ours["dependencies"] if r.split("==")[0] in ("numba", "llvmlite", "tqdm")}
+    assert set(ours["dependencies"]) - set(dependencies) == left_out and len(left_out) == 3
     pytest_pin = next(r for r in ours["optional-dependencies"]["dev"] if r.startswith("pytest=="))
     assert pytest_pin in dependencies
     assert any(re.fullmatch(r"jupyterlab==4\.\d+\.\d+", r) for r in dependencies)
@@ -642,3 +645,22 @@ def test_student_setup_in_fresh_venv(release, tmp_path):
                             timeout=600)
     assert result.returncode == 0, result.stdout + result.stderr
     assert list(student.glob("submission*.zip")), result.stdout
+
+
+def test_the_student_edition_does_not_install_the_instructors_compiled_twins(release):
+    """The compiled twins stay on the instructor's side, and so does numba: the student's
+    pyproject pins only what the edition imports (and what those packages need)."""
+    dependencies = tomllib.loads((release.student / "pyproject.toml").read_text())["project"]["dependencies"]
+    names = {re.split(r"[=<>!~ \[]", d, maxsplit=1)[0].lower() for d in dependencies}
+    assert {"numpy", "pymunk", "pytest"} <= names
+    assert not names & {"numba", "llvmlite"}, dependencies
+    assert not list(release.student.rglob("*numba*.py"))
+
+
+def test_a_runtime_pin_is_kept_for_an_imported_module_and_for_what_it_needs():
+    from grader.release import used_requirements
+
+    pins = ["numpy==2.4.6", "numba==0.68.1", "llvmlite==0.50.0", "sympy==1.14.0"]
+    assert used_requirements(pins, {"numpy", "os"}) == ["numpy==2.4.6"]
+    assert used_requirements(pins, {"numba"}) == ["numpy==2.4.6", "numba==0.68.1", "llvmlite==0.50.0"]
+    assert used_requirements(pins, set()) == []

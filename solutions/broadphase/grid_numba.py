@@ -31,6 +31,8 @@ few seconds) and stores the machine code in ``__pycache__``; later processes loa
 """
 from __future__ import annotations
 
+### INSTRUCTOR ONLY: not in the student edition (the world's backend="numba" is the instructor's; students step the readable stages).
+
 import math
 
 import numpy as np

@@ -265,3 +265,19 @@ def test_restitution_aims_at_the_closing_speed_after_gravity_plain_and_before_it
     World([ground, ball], settings).step(1 / 60)
     want = 0.5 * (3.0 + 9.81 / 60) if not soft else 0.5 * 3.0
     assert ball.velocity[1] == pytest.approx(want, abs=1e-12)
+
+
+@pytest.mark.parametrize("soft", [False, True])
+@pytest.mark.parametrize("stage", ["solve", "relax", "end"])
+def test_a_solver_stage_before_begin_step_says_so(soft, stage):
+    from solutions.body_state import BodyState
+    from solutions.response.contact_solver import ContactSolver
+    from solutions.response.soft_step import SoftStepSolver
+
+    solver = SoftStepSolver() if soft else ContactSolver()
+    state = BodyState.gather([Body.circle(0.5)])
+    call = {"solve": lambda: solver.solve_substep(state, 0.01, use_bias=True),
+            "relax": lambda: solver.solve_substep(state, 0.01, use_bias=False),
+            "end": lambda: solver.end_step(state, 0.01)}[stage]
+    with pytest.raises(RuntimeError, match=r"call begin_step\(\) before"):
+        call()

@@ -146,6 +146,14 @@ class ContactPreparation:
         self._impulses_by_feature: dict[tuple, tuple] = {}
         self._impulses_by_pair: dict[tuple[int, int], list[tuple]] = {}
         self._previous_dt: float | None = None
+        self._contacts: PreparedContacts | None = None
+
+    @property
+    def prepared(self) -> PreparedContacts:
+        """The contacts of the step that ``begin_step`` began (RuntimeError before it)."""
+        if self._contacts is None:
+            raise RuntimeError(f"{type(self).__name__}: call begin_step() before solving or ending a step")
+        return self._contacts
 
     def prepare(self, bodies: list[Body], manifolds: list[tuple[int, int, Contact]], dt: float,
                  block_solver: bool) -> PreparedContacts:

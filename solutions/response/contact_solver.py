@@ -13,13 +13,13 @@ and watch what changes: accumulated impulses, warm starting, friction, rotation,
 block solver for two-point manifolds, the sweep order, and four ways to fix
 penetration.
 
-Calling contract (how ``World.step`` uses the solver)
------------------------------------------------------
+Calling contract
+----------------
 ``manifolds`` is a list of ``(i, j, contact)`` in which ``contact.normal`` points from
 ``bodies[i]`` to ``bodies[j]``.  One solver object lives as long as the world (it
 remembers last step's impulses for warm starting); body indices must keep their
 meaning from one step to the next (call :meth:`ContactSolver.reset` after removing
-bodies)::
+bodies).  A simple world calls it in one go::
 
     def step(self, dt):
         manifolds = self.find_contacts()        # [(i, j, Contact), ...] at the current poses
@@ -32,6 +32,15 @@ bodies)::
             body.angle += dt * body.angular_velocity
         self.solver.finish_step(self.bodies, manifolds, dt)   # 4. position correction
         self.last_stats = self.solver.stats     # SolverStats of this step
+
+:meth:`ContactSolver.solve` is :meth:`~ContactSolver.begin_step` (prepare the contacts)
+followed by the velocity pass and :meth:`~ContactSolver.end_step` (remember the
+impulses, fill the stats).  :class:`~solutions.world.World` calls those stages one by
+one, as it calls the soft step's solver: ``begin_step`` before gravity,
+``solve_substep(state, h, use_bias=True)`` after it, ``solve_substep(..., use_bias=False)``
+(the position correction) after the positions moved, then ``end_step``.  The
+restitution targets come from the velocities the velocity pass starts from, so they
+see this step's gravity either way.
 
 :meth:`ContactSolver.finish_step` dispatches on ``settings.position_correction``:
 
@@ -165,7 +174,7 @@ class ContactSolver(ContactPreparation):
         ([-2.0, 0.0], [2.0, 0.0])
         """
         self.begin_step(bodies, manifolds, dt)
-        c = self._contacts
+        c = self.prepared
         self.write_velocities(c, self._solve_velocities(c, c.velocity, dt))
         self.end_step(None, dt)
 
@@ -184,10 +193,10 @@ class ContactSolver(ContactPreparation):
         """``use_bias``: the velocity pass on ``state`` (warm start, sweeps, split
         impulses; after gravity, before positions move); otherwise the position
         correction (:meth:`finish_step`; after positions moved)."""
+        c = self.prepared
         if not use_bias:
             self.finish_step(self._bodies, self._manifolds, h)
             return
-        c = self._contacts
         rows = np.array(list(c.local), dtype=int)           # world index of each member
         velocity = state.velocity[rows]
         if not self.settings.rotation:
@@ -200,7 +209,7 @@ class ContactSolver(ContactPreparation):
 
     def end_step(self, state: BodyState | None, h: float) -> None:
         """Remember the impulses for the next step's warm start; fill :attr:`stats`."""
-        self.end_contacts(self._contacts, h, total_pseudo_impulse=self._pseudo_total)
+        self.end_contacts(self.prepared, h, total_pseudo_impulse=self._pseudo_total)
 
     def _solve_velocities(self, c: PreparedContacts, velocity: np.ndarray, dt: float) -> np.ndarray:
         """Steps 3 to 5 of the module docstring on the members' ``velocity`` rows; returns

@@ -181,7 +181,7 @@ class SoftStepSolver(ContactPreparation):
         """Separation (m, < 0 overlapping) of each contact point now, per point in
         manifold order: the separation at the start of the step, plus how far the two
         material points that touched there have moved apart along the normal."""
-        c = self._contacts
+        c = self.prepared
         moved = state.position[self._rows] - c.centre
         turned = state.angle[self._rows] - self._start_angle
         cos_less_1, sin = np.cos(turned) - 1.0, np.sin(turned)
@@ -199,7 +199,7 @@ class SoftStepSolver(ContactPreparation):
         pass after it.
         """
         settings = self.settings
-        c = self._contacts
+        c = self.prepared
         if not c.point_count or (not use_bias and not self.soft.relax):
             return
         velocity = state.velocity[self._rows]
@@ -234,7 +234,7 @@ class SoftStepSolver(ContactPreparation):
         ``restitution_threshold`` at the start of the step and pushed in some
         sub-step, aiming at ``-e`` times that closing speed.
         """
-        c = self._contacts
+        c = self.prepared
         if c.point_count:
             bounce = ((c.normal_velocity < -self.settings.restitution_threshold) & (self._max_normal > 0.0)
                       & (c.restitution > 0.0))

@@ -269,21 +269,17 @@ def _requirement_name(requirement: str) -> str:
     return _normal(re.split(r"[\s\[<>=!~;]", requirement.strip(), maxsplit=1)[0])
 
 
-def student_requirements(pyproject: Path = REPO_ROOT / "pyproject.toml",
-                         modules: set[str] | None = None) -> list[str]:
+def student_requirements(modules: set[str], pyproject: Path = REPO_ROOT / "pyproject.toml") -> list[str]:
     """The runtime pins of the repository that the student edition needs, pytest as its
     dev extra pins it, and the notebook packages (pinned like the ``book`` extra where
     it pins them).  ``modules``: the top-level modules the edition imports; a runtime
     pin is kept if it provides one of them or a kept pin depends on it (llvmlite for
-    numba), so the instructor's compiled twins do not make students install numba.
-    None keeps every runtime pin."""
+    numba), so the instructor's compiled twins do not make students install numba."""
     data = tomllib.loads(Path(pyproject).read_text(encoding="utf-8"))
     project = data["project"]
     extras = project.get("optional-dependencies", {})
     pins = {_requirement_name(r): r for extra in extras.values() for r in extra}
-    requirements = list(project.get("dependencies", []))
-    if modules is not None:
-        requirements = used_requirements(requirements, modules)
+    requirements = used_requirements(list(project.get("dependencies", [])), modules)
     if "pytest" not in pins:
         raise ReleaseError("the repository's pyproject.toml pins no pytest in its extras")
     requirements.append(pins["pytest"])
@@ -692,7 +688,7 @@ def write_student(target: Path, repo_root: Path = REPO_ROOT) -> dict:
             if cell.cell_type == "code":
                 for module in imported_modules(cell.source):
                     modules.setdefault(module.split(".")[0], f"book/{notebook}")
-    requirements = student_requirements(repo_root / "pyproject.toml", set(modules))
+    requirements = student_requirements(set(modules), repo_root / "pyproject.toml")
     added, warnings = check_dependencies(modules, requirements, repo_root / "pyproject.toml")
     for test in public_tests_using_reference(grader_dir):
         warnings.append(f"grader/{test} asks for the reference fixture: on the student's side it cannot run")

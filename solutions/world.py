@@ -69,14 +69,6 @@ from .response.soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, SoftStepSolver
 from .shapes import AABB, OBB, Circle, Shape, bounding_aabb
 from .twins import HAS_TWINS, require_twins
 
-#: The soft step computes box-box manifolds with numpy from this many pairs on (the
-#: loop over speculative_polygon_manifold gives the same contacts to rounding).  From
-#: the first pair: the soft contact switches from rigid to spring where a separation
-#: crosses 0, so a rounding difference of 1e-16 m at an exactly touching contact (a box
-#: resting on a slope) changes the motion by up to 1e-6 m/s, and the compiled step
-#: (:mod:`~solutions.response.soft_step_numba`) must follow the numpy arithmetic exactly.
-BATCH_MIN_BOX_PAIRS = 1
-
 BROAD_PHASES = ("auto", "all_pairs", "brute_force", "uniform_grid", "quadtree", "numpy_grid")
 
 #: ``broad_phase="auto"`` takes the method measured fastest for the scene
@@ -267,9 +259,10 @@ class World:
             self.stop_bullets(shapes, starts)
 
     def compiled_step(self, h: float) -> None:
-        """The soft step (:meth:`step` with ``soft_step``) as one compiled function (:mod:`~solutions.response.soft_step_numba`)."""
+        """The soft step (:meth:`step` with ``soft_step``) as one compiled function
+        (:mod:`~solutions.response.soft_step_numba`)."""
         compiled = self.compiled_soft_step
-        compiled.step(self.state, h, self.settings.substeps, self.settings.gravity, self.settings)
+        compiled.step(self.state, h, self.settings)
         for _ in range(self.settings.substeps):
             self.time += h
         # Contacts and figures are made when asked for.
@@ -385,11 +378,15 @@ class World:
         touching (circles); each contact carries the signed separation of its points
         (``Contact.separations``, m, > 0 apart)."""
         found = [None] * len(pairs)
-        # Box-box pairs all at once with numpy (the same answer as the loop below).
+        # Every box-box pair at once with numpy (the loop over speculative_polygon_manifold
+        # gives the same contacts to rounding), from the first pair: the soft contact
+        # switches from rigid to spring where a separation crosses 0, so a rounding
+        # difference of 1e-16 m at an exactly touching contact (a box resting on a slope)
+        # changes the motion by up to 1e-6 m/s, and the compiled step
+        # (:mod:`~solutions.response.soft_step_numba`) follows the numpy arithmetic exactly.
+        # The student edition has no batch twin and takes the loop below.
         boxes = [k for k, (i, j) in enumerate(pairs) if isinstance(shapes[i], (AABB, OBB))
-                 and isinstance(shapes[j], (AABB, OBB))]
-        if len(boxes) < BATCH_MIN_BOX_PAIRS or not HAS_TWINS:
-            boxes = []                     # the loop below (the student edition has no batch twin)
+                 and isinstance(shapes[j], (AABB, OBB))] if HAS_TWINS else []
         batched = set(boxes)
         if boxes:
             from .narrowphase.speculative_batch import box_pose, manifolds_as_contacts, speculative_box_manifolds

@@ -654,9 +654,10 @@ class CompiledSoftStep:
         self.previous_h = None
         self.candidate_pairs = self.manifold_count = self.warm_started = self.block_count = 0
 
-    def step(self, state, h: float, substeps: int, gravity, settings) -> None:
-        """One step of ``substeps`` sub-steps of ``h`` (s) on ``state`` (updated in place)."""
-        solver, springs = settings.solver, settings.soft
+    def step(self, state, h: float, settings) -> None:
+        """One step of ``settings.substeps`` sub-steps of ``h`` (s) on ``state`` (updated
+        in place), under the world's ``settings``."""
+        solver, springs, gravity = settings.solver, settings.soft, settings.gravity
         key = (h, springs.contact_hertz, springs.contact_damping_ratio)
         if key != self._coefficients_key:
             hertz = min(springs.contact_hertz, 0.25 / h)
@@ -670,7 +671,7 @@ class CompiledSoftStep:
         (self.candidate_pairs, self.manifold_count, self.warm_started, self.block_count, self.point_ints,
          self.point_floats) = _soft_step(
             state.position, state.angle, state.velocity, state.dynamic, state.turning, self.bodies, self.point_ints,
-            self.point_floats, float(dt_ratio), float(h), int(substeps), float(gravity[0]), float(gravity[1]),
+            self.point_floats, float(dt_ratio), float(h), int(settings.substeps), float(gravity[0]), float(gravity[1]),
             int(solver.iterations), soft, stiff, bool(springs.relax), float(solver.max_push_velocity),
             float(solver.restitution_threshold), bool(solver.friction), bool(solver.warm_starting),
             float(solver.warm_start_match_distance), bool(solver.block_solver), solver.order == "colours",

@@ -31,3 +31,19 @@ class MadeWhenAsked:
 
     def __set__(self, instance, value) -> None:
         instance.__dict__[self.slot] = value
+
+    @staticmethod
+    def set_recipes(instance, recipes: dict) -> None:
+        """Set several such attributes of ``instance`` at once: ``recipes`` maps each
+        attribute's storage slot (``"_" + name``) to its recipe.  One dictionary update,
+        for a caller that sets them every step (a Python-level ``__set__`` costs about a
+        tenth of a microsecond each).
+
+        >>> class Step:
+        ...     figures = MadeWhenAsked()
+        >>> step = Step()
+        >>> MadeWhenAsked.set_recipes(step, {"_figures": lambda: 3})
+        >>> step.figures
+        3
+        """
+        instance.__dict__.update(recipes)

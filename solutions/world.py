@@ -219,16 +219,20 @@ class World:
             from .response.soft_step_numba import CompiledSoftStep
 
             if CompiledSoftStep.supports(self):
-                self.compiled_soft_step = CompiledSoftStep(self.bodies, self.joints)
+                self.compiled_soft_step = compiled = CompiledSoftStep(self.bodies, self.joints)
+                # After each compiled step, contacts and figures are made when first read.
+                self._compiled_world_recipes = {"_manifolds": compiled.contacts, "_stats": self._compiled_stats}
+                self._compiled_solver_recipes = {"_stats": compiled.solver_stats,
+                                                 "_contact_impulses": compiled.contact_impulses}
         self.stats = StepStats()
         self._static_shapes: dict[int, Shape] = {}
 
     # The algorithm --------------------------------------------------------------
     def step(self, dt: float) -> None:
         """Advance the world by ``dt`` seconds (``substeps`` sub-steps of ``h``)."""
-        if not (dt > 0 and math.isfinite(dt)):
+        if not (0.0 < dt < math.inf):
             raise ValueError(f"dt must be a positive number of seconds, got {dt}")
-        if len(self.bodies) != len(self.state):
+        if len(self.bodies) != len(self.state.angle):
             raise ValueError(f"the world was made with {len(self.state)} bodies and now lists {len(self.bodies)}: "
                              "bodies cannot be added or removed; make a new World with the new list")
         h = dt / self.settings.substeps
@@ -261,18 +265,19 @@ class World:
     def compiled_step(self, h: float) -> None:
         """The soft step (:meth:`step` with ``soft_step``) as one compiled function
         (:mod:`~solutions.response.soft_step_numba`)."""
-        compiled = self.compiled_soft_step
-        compiled.step(self.state, h, self.settings)
-        for _ in range(self.settings.substeps):
+        settings = self.settings
+        self.compiled_soft_step.step(self.state, h, settings)
+        for _ in range(settings.substeps):
             self.time += h
-        # Contacts and figures are made when asked for.
-        self.manifolds = compiled.contacts
-        self.stats = lambda: StepStats(candidate_pairs=int(compiled.candidate_pairs),
-                                       manifolds=compiled.manifold_count,
-                                       contact_points=len(compiled.point_floats),
-                                       max_penetration=compiled.stats.max_penetration)
-        self.solver.stats = lambda: compiled.stats
-        self.solver.contact_impulses = compiled.contact_impulses
+        MadeWhenAsked.set_recipes(self, self._compiled_world_recipes)
+        MadeWhenAsked.set_recipes(self.solver, self._compiled_solver_recipes)
+
+    def _compiled_stats(self) -> StepStats:
+        """The figures of the last compiled step (the recipe of :attr:`stats`)."""
+        compiled = self.compiled_soft_step
+        return StepStats(candidate_pairs=int(compiled.candidate_pairs), manifolds=compiled.manifold_count,
+                         contact_points=len(compiled.point_floats),
+                         max_penetration=compiled.solver_stats().max_penetration)
 
     # The stages -----------------------------------------------------------------
     def find_contacts(self, shapes: list[Shape]) -> list[tuple[int, int, Contact]]:

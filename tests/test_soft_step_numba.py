@@ -86,6 +86,42 @@ def test_the_compiled_step_gives_the_readable_contacts_impulses_and_figures():
     assert readable.time == compiled.time
 
 
+def test_the_compiled_steps_point_buffers_grow_without_changing_the_motion(monkeypatch):
+    """The points live in two buffers of a capacity that grows: a step that finds more
+    points than they hold changes nothing, and runs again on bigger buffers."""
+    from solutions.response.soft_step_numba import CompiledSoftStep
+
+    scene = get_scene("pyramid_10")
+    roomy = scene.build_world(replace(scene.recommended_settings(), backend="numba"))
+    monkeypatch.setattr(CompiledSoftStep, "INITIAL_POINT_CAPACITY", 1)
+    tight = scene.build_world(replace(scene.recommended_settings(), backend="numba"))
+    capacities = set()
+    for _ in range(10):
+        roomy.step(scene.dt)
+        tight.step(scene.dt)
+        capacities.add(tight.compiled_soft_step.memory_ints.shape[1])
+        np.testing.assert_array_equal(tight.state.position, roomy.state.position)
+        np.testing.assert_array_equal(tight.state.velocity, roomy.state.velocity)
+    assert min(capacities) >= len(tight.compiled_soft_step.point_ints) > 200
+    assert tight.solver.contact_impulses == roomy.solver.contact_impulses and tight.stats == roomy.stats
+
+
+def test_settings_changed_between_compiled_steps_take_effect():
+    """The compiled step writes its parameters again whenever a setting it reads changes."""
+    readable, compiled = pair(lambda: box_pile(1), WorldSettings(soft_step=True, substeps=2))
+    changes = [lambda w: setattr(w.settings.solver, "iterations", 3),
+               lambda w: setattr(w.settings.soft, "relax", False),
+               lambda w: setattr(w.settings, "gravity", (1.0, -4.0)),
+               lambda w: setattr(w.settings.soft, "contact_hertz", 20.0),
+               lambda w: setattr(w.settings, "substeps", 3),
+               lambda w: setattr(w.settings.solver, "friction", False)]
+    for change in changes:
+        assert_same_motion(readable, compiled, 0.1, 1 / 60)
+        change(readable)
+        change(compiled)
+    assert_same_motion(readable, compiled, 0.1, 1 / 90)
+
+
 def disc_chain(seed: int) -> tuple[list[Body], list[DistanceJoint]]:
     """Discs on a static pin: a chain of rods and springs (some anchors off centre) that
     folds onto itself, and loose discs dropped on it."""

@@ -62,6 +62,37 @@ POINT_PAIR, POINT_FEATURE, POINT_A, POINT_B = range(4)
 #: Columns of their float array: point (m), normal, signed separation at the start of the
 #: step (m), accumulated normal and tangent impulses (N s).
 POINT_X, POINT_Y, POINT_NX, POINT_NY, POINT_SEPARATION, POINT_NORMAL_IMPULSE, POINT_TANGENT_IMPULSE = range(7)
+#: The step's figures, an integer array it reads and writes: which of the two point
+#: buffers holds the last step's points (0 or 1) and how many; then what this step
+#: counted: candidate pairs, manifolds, warm-started points, manifolds solved as blocks.
+(FIGURE_MEMORY, FIGURE_POINTS, FIGURE_CANDIDATE_PAIRS, FIGURE_MANIFOLDS, FIGURE_WARM_STARTED,
+ FIGURE_BLOCK_MANIFOLDS) = range(6)
+FIGURE_COUNT = 6
+#: Rows of the joints' integer array: bodies a and b of each joint, then the joined pairs'
+#: sorted keys ``i * n + j`` (as many as distinct pairs), padded with ``NO_PAIR``.
+JOINT_A, JOINT_B, JOINT_PAIRS = range(3)
+NO_PAIR = np.iinfo(np.int64).max
+#: Columns of the joints' constant float array (one row per joint): anchors in the
+#: bodies' frames (m), rest length (m), spring frequency (Hz, 0: a rod), damping ratio.
+(JOINT_ANCHOR_AX, JOINT_ANCHOR_AY, JOINT_ANCHOR_BX, JOINT_ANCHOR_BY, JOINT_LENGTH, JOINT_FREQUENCY,
+ JOINT_DAMPING) = range(7)
+#: Positions in the step's float parameters: the ratio of this step's h to the last
+#: one's, h (s), gravity (m/s^2), the largest push (m/s), the restitution threshold
+#: (m/s), the warm start's match distance (m), the speculative margin (m), then the
+#: (bias rate, mass scale, impulse scale) of the soft contacts, of the contacts with a
+#: static body and of the joints.  Few arguments: calling a compiled function costs
+#: about 45 ns per argument, which was a quarter of a small world's step.
+(PARAMETER_DT_RATIO, PARAMETER_H, PARAMETER_GRAVITY_X, PARAMETER_GRAVITY_Y, PARAMETER_MAX_PUSH,
+ PARAMETER_RESTITUTION_THRESHOLD, PARAMETER_MATCH_DISTANCE, PARAMETER_MARGIN) = range(8)
+PARAMETER_SOFT, PARAMETER_STIFF, PARAMETER_JOINT_SOFTNESS = 8, 11, 14
+PARAMETER_COUNT = 17
+#: Positions in the step's integer switches: sub-steps, sweeps per pass, relax,
+#: friction, warm starting, block solver, colour order, the two matmul roundings
+#: (:func:`~solutions.narrowphase.box_pairs_numba.matmul_rounding`), discs (else
+#: boxes), rotation.
+(SWITCH_SUBSTEPS, SWITCH_ITERATIONS, SWITCH_RELAX, SWITCH_FRICTION, SWITCH_WARM_START, SWITCH_BLOCK_SOLVER,
+ SWITCH_COLOURS, SWITCH_CORNER_ROUNDING, SWITCH_INCIDENT_ROUNDING, SWITCH_CIRCLES, SWITCH_ROTATION) = range(11)
+SWITCH_COUNT = 11
 
 
 @njit(cache=True)
@@ -271,7 +302,7 @@ def _joint_rows(count):
 
 
 @njit(cache=True)
-def _solve_joints(velocity, position, angle, joint_a, joint_b, anchors, length, frequency, damping, impulses,
+def _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, impulses,
                   inverse_mass, inverse_inertia, h, iterations, use_bias, softness, warm_starting, work):
     """:meth:`solutions.joints.JointSolver.solve` of the soft step on arrays: each joint
     a bilateral row of the kernel (soft rod, or spring), warm started on the biased pass;
@@ -286,10 +317,12 @@ def _solve_joints(velocity, position, angle, joint_a, joint_b, anchors, length, 
     for k in range(joint_a.shape[0]):
         a, b = joint_a[k], joint_b[k]
         ca, sa, cb, sb = math.cos(angle[a]), math.sin(angle[a]), math.cos(angle[b]), math.sin(angle[b])
-        pax = position[a, 0] + ca * anchors[k, 0] - sa * anchors[k, 1]
-        pay = position[a, 1] + sa * anchors[k, 0] + ca * anchors[k, 1]
-        pbx = position[b, 0] + cb * anchors[k, 2] - sb * anchors[k, 3]
-        pby = position[b, 1] + sb * anchors[k, 2] + cb * anchors[k, 3]
+        anchor_ax, anchor_ay = joint_floats[k, JOINT_ANCHOR_AX], joint_floats[k, JOINT_ANCHOR_AY]
+        anchor_bx, anchor_by = joint_floats[k, JOINT_ANCHOR_BX], joint_floats[k, JOINT_ANCHOR_BY]
+        pax = position[a, 0] + ca * anchor_ax - sa * anchor_ay
+        pay = position[a, 1] + sa * anchor_ax + ca * anchor_ay
+        pbx = position[b, 0] + cb * anchor_bx - sb * anchor_by
+        pby = position[b, 1] + sb * anchor_bx + cb * anchor_by
         dx, dy = pbx - pax, pby - pay
         distance = math.hypot(dx, dy)
         if distance > 1e-12:
@@ -302,11 +335,12 @@ def _solve_joints(velocity, position, angle, joint_a, joint_b, anchors, length, 
         if inverse == 0.0:          # two static bodies: no row, and no impulse to remember
             impulses[k] = 0.0
             continue
-        error = distance - length[k]
-        if frequency[k] > 0:
-            omega = 2 * math.pi * frequency[k]
+        error = distance - joint_floats[k, JOINT_LENGTH]
+        frequency = joint_floats[k, JOINT_FREQUENCY]
+        if frequency > 0:
+            omega = 2 * math.pi * frequency
             spring_mass = 1.0 / inverse
-            k_spring, c_damp = spring_mass * omega * omega, 2 * spring_mass * damping[k] * omega
+            k_spring, c_damp = spring_mass * omega * omega, 2 * spring_mass * joint_floats[k, JOINT_DAMPING] * omega
             gamma = h * (c_damp + h * k_spring)
             gamma = 1.0 / gamma if gamma > 0 else 0.0
             target[r] = -error * h * k_spring * gamma
@@ -353,11 +387,30 @@ def _zero_static_velocities(velocity, static_members):
 
 
 @njit(cache=True)
-def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, old_floats, dt_ratio, h, substeps,
-               gravity_x, gravity_y, iterations, soft, stiff, relax, max_push, restitution_threshold,
-               use_friction, warm_start, match_distance, block_solver, colours, margin, corner_rounding,
-               incident_rounding, circles, rotation, jointed, joint_a, joint_b, anchors, length, frequency, damping,
-               joint_impulses, joint_softness):
+def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints, memory_floats, figures,
+               parameters, switches, joint_ints, joint_floats, joint_impulses):
+    """One soft step of the world (module docstring): ``parameters`` and ``switches``
+    (``PARAMETER_*``, ``SWITCH_*``), the bodies' and joints' constants (``BODY_*``,
+    ``JOINT_*``).  The contact points (``POINT_*``) live in two buffers,
+    ``memory_*[0]`` and ``memory_*[1]``: the step reads the last step's from the one
+    ``figures`` names and writes its own into the other, then updates ``figures``
+    (``FIGURE_*``).  Returns 0, or, having changed nothing, the number of points the
+    buffers must hold for this step."""
+    dt_ratio, h = parameters[PARAMETER_DT_RATIO], parameters[PARAMETER_H]
+    gravity_x, gravity_y = parameters[PARAMETER_GRAVITY_X], parameters[PARAMETER_GRAVITY_Y]
+    max_push, restitution_threshold = parameters[PARAMETER_MAX_PUSH], parameters[PARAMETER_RESTITUTION_THRESHOLD]
+    match_distance, margin = parameters[PARAMETER_MATCH_DISTANCE], parameters[PARAMETER_MARGIN]
+    soft = parameters[PARAMETER_SOFT:PARAMETER_SOFT + 3]
+    stiff = parameters[PARAMETER_STIFF:PARAMETER_STIFF + 3]
+    joint_softness = parameters[PARAMETER_JOINT_SOFTNESS:PARAMETER_JOINT_SOFTNESS + 3]
+    substeps, iterations = switches[SWITCH_SUBSTEPS], switches[SWITCH_ITERATIONS]
+    relax, use_friction = switches[SWITCH_RELAX] != 0, switches[SWITCH_FRICTION] != 0
+    warm_start, block_solver = switches[SWITCH_WARM_START] != 0, switches[SWITCH_BLOCK_SOLVER] != 0
+    colours, circles, rotation = switches[SWITCH_COLOURS] != 0, switches[SWITCH_CIRCLES] != 0, switches[SWITCH_ROTATION] != 0
+    corner_rounding, incident_rounding = switches[SWITCH_CORNER_ROUNDING], switches[SWITCH_INCIDENT_ROUNDING]
+    joint_a, joint_b, jointed = joint_ints[JOINT_A], joint_ints[JOINT_B], joint_ints[JOINT_PAIRS]
+    last = figures[FIGURE_MEMORY]
+    old_ints, old_floats = memory_ints[last, :figures[FIGURE_POINTS]], memory_floats[last, :figures[FIGURE_POINTS]]
     n = angle.shape[0]
     half, inverse_mass, inverse_inertia = bodies[:, 0:2], bodies[:, BODY_INVERSE_MASS], bodies[:, BODY_INVERSE_INERTIA]
     friction_of, restitution_of = bodies[:, BODY_FRICTION], bodies[:, BODY_RESTITUTION]
@@ -391,6 +444,8 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
         if found[k]:
             g_count += 1
             p_count += count[k]
+    if p_count > memory_ints.shape[1]:
+        return p_count
     # Each array below is a row of one of a few blocks: one allocation per block, not per
     # array (allocations were half the cost of a step of a small world).
     group_ints = np.empty((9, g_count), np.int64)
@@ -562,9 +617,8 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
                         max_normal[r] = max(max_normal[r], normal_s[r])
                 _zero_static_velocities(velocity, static_members)
             if biased and joint_a.shape[0]:     # the joints: soft rods after the contacts
-                _solve_joints(velocity, position, angle, joint_a, joint_b, anchors, length, frequency, damping,
-                              joint_impulses, inverse_mass, inverse_inertia, h, iterations, True, joint_softness,
-                              warm_start, joint_work)
+                _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, joint_impulses, inverse_mass,
+                              inverse_inertia, h, iterations, True, joint_softness, warm_start, joint_work)
             if biased:      # positions between the two passes
                 for i in range(n):
                     if dynamic[i]:
@@ -573,9 +627,9 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
                     if turning[i]:
                         angle[i] += h * velocity[i, 2]
                 if relax and joint_a.shape[0]:
-                    _solve_joints(velocity, position, angle, joint_a, joint_b, anchors, length, frequency, damping,
-                                  joint_impulses, inverse_mass, inverse_inertia, h, iterations, False,
-                                  joint_softness, warm_start, joint_work)
+                    _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, joint_impulses,
+                                  inverse_mass, inverse_inertia, h, iterations, False, joint_softness, warm_start,
+                                  joint_work)
 
     # 5. Restitution (SoftStepSolver.end_step).
     if p_count:
@@ -597,15 +651,17 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, old_ints, ol
     for q in range(g_count):
         if block[q]:
             block_count += 1
-    # The points, packed for the caller (they are also the next step's warm-start memory).
-    ints = np.empty((p_count, 4), dtype=np.int64)
-    floats = np.empty((p_count, 7))
+    # The points, for the caller and as the next step's warm-start memory.
+    ints, floats = memory_ints[1 - last], memory_floats[1 - last]
     for k in range(p_count):
         ints[k, POINT_PAIR], ints[k, POINT_FEATURE], ints[k, POINT_A], ints[k, POINT_B] = pair_key[k], feature[k], a[k], b[k]
         floats[k, POINT_X], floats[k, POINT_Y], floats[k, POINT_NX], floats[k, POINT_NY] = px[k], py[k], nx[k], ny[k]
         floats[k, POINT_SEPARATION] = sep[k]
         floats[k, POINT_NORMAL_IMPULSE], floats[k, POINT_TANGENT_IMPULSE] = normal_total[k], tangent_total[k]
-    return m, g_count, warm_started, block_count, ints, floats
+    figures[FIGURE_MEMORY], figures[FIGURE_POINTS] = 1 - last, p_count
+    figures[FIGURE_CANDIDATE_PAIRS], figures[FIGURE_MANIFOLDS] = m, g_count
+    figures[FIGURE_WARM_STARTED], figures[FIGURE_BLOCK_MANIFOLDS] = warm_started, block_count
+    return 0
 
 
 class CompiledSoftStep:
@@ -613,9 +669,12 @@ class CompiledSoftStep:
 
     Holds the bodies' constant array (half-extents or radius, inverse masses and
     inertias, friction, restitution; columns ``BODY_*``), the joints as arrays with
-    their last impulses, and the last step's contact points (columns ``POINT_*``),
-    which are also the next step's warm start.
+    their last impulses, and two buffers of contact points (columns ``POINT_*``): the
+    last step's, which are also the next step's warm start, and the next step's.
     """
+
+    #: Contact points the buffers hold at first; they grow to twice what a step needs.
+    INITIAL_POINT_CAPACITY = 16
 
     def __init__(self, bodies, joints=()):
         self.circles = bool(bodies) and isinstance(bodies[0].shape, Circle)
@@ -623,14 +682,14 @@ class CompiledSoftStep:
         self.bodies = np.array([[*half, body.inverse_mass, body.inverse_inertia, body.friction, body.restitution]
                                 for half, body in zip(size, bodies)], dtype=float).reshape(-1, 6)
         self.body_count = n = len(bodies)
-        self.joint_a = np.array([joint.a for joint in joints], dtype=np.int64)
-        self.joint_b = np.array([joint.b for joint in joints], dtype=np.int64)
-        self.anchors = np.array([[*joint.anchor_a, *joint.anchor_b] for joint in joints], dtype=float).reshape(-1, 4)
-        self.joint_length, self.joint_frequency, self.joint_damping = (
-            np.array([getattr(joint, name) for joint in joints], dtype=float)
-            for name in ("length", "frequency", "damping_ratio"))
-        self.jointed = np.unique(np.array([min(j.a, j.b) * n + max(j.a, j.b) for j in joints], dtype=np.int64))
-        self._coefficients_key = None
+        joined = np.unique(np.array([min(j.a, j.b) * n + max(j.a, j.b) for j in joints], dtype=np.int64))
+        self.joint_ints = np.full((3, len(joints)), NO_PAIR, dtype=np.int64)
+        self.joint_ints[JOINT_A] = [joint.a for joint in joints]
+        self.joint_ints[JOINT_B] = [joint.b for joint in joints]
+        self.joint_ints[JOINT_PAIRS, :len(joined)] = joined
+        self.joint_floats = np.array([[*joint.anchor_a, *joint.anchor_b, joint.length, joint.frequency,
+                                       joint.damping_ratio] for joint in joints], dtype=float).reshape(-1, 7)
+        self.parameters, self.switches = np.zeros(PARAMETER_COUNT), np.zeros(SWITCH_COUNT, dtype=np.int64)
         self.reset()
 
     @staticmethod
@@ -649,45 +708,90 @@ class CompiledSoftStep:
 
     def reset(self) -> None:
         """Forget last step's impulses."""
-        self.point_ints, self.point_floats = np.zeros((0, 4), dtype=np.int64), np.zeros((0, 7))
-        self.joint_impulses = np.zeros(len(self.joint_a))
+        capacity = self.INITIAL_POINT_CAPACITY
+        self.memory_ints, self.memory_floats = np.zeros((2, capacity, 4), np.int64), np.zeros((2, capacity, 7))
+        self.figures = np.zeros(FIGURE_COUNT, dtype=np.int64)
+        self.joint_impulses = np.zeros(self.joint_ints.shape[1])
         self.previous_h = None
-        self.candidate_pairs = self.manifold_count = self.warm_started = self.block_count = 0
+        self._settings_key = None
 
     def step(self, state, h: float, settings) -> None:
         """One step of ``settings.substeps`` sub-steps of ``h`` (s) on ``state`` (updated
         in place), under the world's ``settings``."""
-        solver, springs, gravity = settings.solver, settings.soft, settings.gravity
-        key = (h, springs.contact_hertz, springs.contact_damping_ratio)
-        if key != self._coefficients_key:
-            hertz = min(springs.contact_hertz, 0.25 / h)
-            self._coefficients = (soft_coefficients(hertz, springs.contact_damping_ratio, h),
-                                  soft_coefficients(2.0 * hertz, springs.contact_damping_ratio, h),
-                                  soft_coefficients(min(JOINT_HERTZ, 0.25 / h), JOINT_DAMPING_RATIO, h),
-                                  matmul_rounding()[:2])
-            self._coefficients_key = key
-        (soft, stiff, joint_softness, (corner_rounding, incident_rounding)) = self._coefficients
-        dt_ratio = 1.0 if self.previous_h is None else h / self.previous_h
-        (self.candidate_pairs, self.manifold_count, self.warm_started, self.block_count, self.point_ints,
-         self.point_floats) = _soft_step(
-            state.position, state.angle, state.velocity, state.dynamic, state.turning, self.bodies, self.point_ints,
-            self.point_floats, float(dt_ratio), float(h), int(settings.substeps), float(gravity[0]), float(gravity[1]),
-            int(solver.iterations), soft, stiff, bool(springs.relax), float(solver.max_push_velocity),
-            float(solver.restitution_threshold), bool(solver.friction), bool(solver.warm_starting),
-            float(solver.warm_start_match_distance), bool(solver.block_solver), solver.order == "colours",
-            SPECULATIVE_MARGIN, corner_rounding, incident_rounding, self.circles, bool(solver.rotation),
-            self.jointed, self.joint_a, self.joint_b, self.anchors, self.joint_length, self.joint_frequency,
-            self.joint_damping, self.joint_impulses, joint_softness)
+        solver, springs = settings.solver, settings.soft
+        gravity_x, gravity_y = settings.gravity
+        # The settings as read now; parameters and switches are written again only when they change.
+        key = (h, self.previous_h, settings.substeps, gravity_x, gravity_y, solver.iterations, solver.friction,
+               solver.warm_starting, solver.warm_start_match_distance, solver.block_solver, solver.order,
+               solver.rotation, solver.max_push_velocity, solver.restitution_threshold, springs.contact_hertz,
+               springs.contact_damping_ratio, springs.relax)
+        if key != self._settings_key:
+            self._write_parameters(h, settings)
+            self._settings_key = key
+        while True:
+            needed = _soft_step(state.position, state.angle, state.velocity, state.dynamic, state.turning,
+                                self.bodies, self.memory_ints, self.memory_floats, self.figures, self.parameters,
+                                self.switches, self.joint_ints, self.joint_floats, self.joint_impulses)
+            if not needed:
+                break
+            self._grow_memory(2 * needed)        # nothing changed: step again
         self.previous_h = h
 
+    def _grow_memory(self, capacity: int) -> None:
+        """Point buffers of ``capacity`` points, the last step's points kept."""
+        ints, floats = np.zeros((2, capacity, 4), np.int64), np.zeros((2, capacity, 7))
+        held = self.memory_ints.shape[1]
+        ints[:, :held], floats[:, :held] = self.memory_ints, self.memory_floats
+        self.memory_ints, self.memory_floats = ints, floats
+
     @property
-    def stats(self) -> SolverStats:
+    def point_ints(self) -> np.ndarray:
+        """The last step's contact points, integer columns ``POINT_PAIR`` to ``POINT_B``."""
+        return self.memory_ints[self.figures[FIGURE_MEMORY], :self.figures[FIGURE_POINTS]]
+
+    @property
+    def point_floats(self) -> np.ndarray:
+        """The last step's contact points, float columns ``POINT_X`` to ``POINT_TANGENT_IMPULSE``."""
+        return self.memory_floats[self.figures[FIGURE_MEMORY], :self.figures[FIGURE_POINTS]]
+
+    @property
+    def candidate_pairs(self) -> int:
+        return int(self.figures[FIGURE_CANDIDATE_PAIRS])
+
+    @property
+    def manifold_count(self) -> int:
+        return int(self.figures[FIGURE_MANIFOLDS])
+
+    def _write_parameters(self, h: float, settings) -> None:
+        """The step's ``parameters`` and ``switches`` from ``settings`` and ``h`` (s)."""
+        solver, springs = settings.solver, settings.soft
+        hertz = min(springs.contact_hertz, 0.25 / h)
+        parameters = self.parameters
+        parameters[PARAMETER_DT_RATIO] = 1.0 if self.previous_h is None else h / self.previous_h
+        parameters[PARAMETER_H] = h
+        parameters[PARAMETER_GRAVITY_X], parameters[PARAMETER_GRAVITY_Y] = settings.gravity
+        parameters[PARAMETER_MAX_PUSH] = solver.max_push_velocity
+        parameters[PARAMETER_RESTITUTION_THRESHOLD] = solver.restitution_threshold
+        parameters[PARAMETER_MATCH_DISTANCE] = solver.warm_start_match_distance
+        parameters[PARAMETER_MARGIN] = SPECULATIVE_MARGIN
+        parameters[PARAMETER_SOFT:PARAMETER_SOFT + 3] = soft_coefficients(hertz, springs.contact_damping_ratio, h)
+        parameters[PARAMETER_STIFF:PARAMETER_STIFF + 3] = soft_coefficients(2.0 * hertz,
+                                                                              springs.contact_damping_ratio, h)
+        parameters[PARAMETER_JOINT_SOFTNESS:PARAMETER_JOINT_SOFTNESS + 3] = soft_coefficients(
+            min(JOINT_HERTZ, 0.25 / h), JOINT_DAMPING_RATIO, h)
+        corner_rounding, incident_rounding = matmul_rounding()[:2]
+        self.switches[:] = (settings.substeps, solver.iterations, springs.relax, solver.friction,
+                            solver.warm_starting, solver.block_solver, solver.order == "colours", corner_rounding,
+                            incident_rounding, self.circles, solver.rotation)
+
+    def solver_stats(self) -> SolverStats:
         """The last step's :class:`SolverStats`, as the readable soft step fills them."""
         floats = self.point_floats
         return SolverStats(manifolds=self.manifold_count, contact_points=len(floats),
                            total_normal_impulse=float(floats[:, POINT_NORMAL_IMPULSE].sum()),
                            max_penetration=float((-floats[:, POINT_SEPARATION]).max(initial=0.0)),
-                           warm_started_points=self.warm_started, block_manifolds=self.block_count)
+                           warm_started_points=int(self.figures[FIGURE_WARM_STARTED]),
+                           block_manifolds=int(self.figures[FIGURE_BLOCK_MANIFOLDS]))
 
     def contacts(self) -> list:
         """The last step's manifolds as ``(i, j, Contact)``, as the readable step gives them."""

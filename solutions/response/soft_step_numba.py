@@ -44,6 +44,9 @@ import numpy as np
 from numba import njit
 
 from ..contact import Contact
+from ..broadphase.grid_numba import (DENSE_STRIPS_PER_ENTRY, _check_and_measure, _grid_pairs, _grown, _strips)
+from ..broadphase.grid_numba import _sorted_pairs as _sorted_grid_pairs
+from ..broadphase.sorted_grid_numpy import DEFAULT_MAX_STRIPS_PER_BODY, MAX_STRIP_INDEX
 from ..narrowphase.box_pairs_numba import _box_faces, _manifolds_kernel, matmul_rounding
 from ..narrowphase.circle_circle import COINCIDENT_CENTRES_ATOL, COINCIDENT_CENTRES_NORMAL
 from ..narrowphase.speculative import SPECULATIVE_MARGIN
@@ -55,6 +58,12 @@ from .soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, soft_coefficients
 from .solver_settings import SolverStats
 
 
+#: The candidate pairs come from the strip grid of
+#: :mod:`~solutions.broadphase.grid_numba` from this many bodies on (a sort-and-sweep
+#: on x below, and for bodies scattered over heights far larger than they are):
+#: measured, the sweep is faster up to about that many bodies and the grid beyond (on
+#: a 20-base pyramid, the sweep meets about ten times as many pairs as it keeps).
+STRIP_GRID_MIN_BODIES = 64
 #: Columns of the bodies' constant array (one row per body).
 BODY_HALF_X, BODY_HALF_Y, BODY_INVERSE_MASS, BODY_INVERSE_INERTIA, BODY_FRICTION, BODY_RESTITUTION = range(6)
 #: Columns of the contact points' integer array: pair key ``i * n + j``, feature id, bodies.
@@ -98,8 +107,9 @@ SWITCH_COUNT = 11
 @njit(cache=True)
 def _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding, circles, jointed):
     """Pairs ``i < j`` of bodies whose AABBs widened by ``margin / 2`` overlap or touch,
-    not both static and not joined (``jointed``: sorted keys), as sorted keys
-    ``i * n + j``; boxes, or discs of radius ``half[:, 0]`` if ``circles``."""
+    not both static and not joined (``jointed``: sorted keys, padded with ``NO_PAIR``),
+    as sorted keys ``i * n + j`` and their ``i`` and ``j``; boxes, or discs of radius
+    ``half[:, 0]`` if ``circles``."""
     n = angle.shape[0]
     aabb = np.empty((n, 4))
     vertices, normals = np.empty((4, 2)), np.empty((4, 2))
@@ -116,29 +126,62 @@ def _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding, ci
         aabb[i, 1] = min(vertices[0, 1], vertices[1, 1], vertices[2, 1], vertices[3, 1]) + (-grow)
         aabb[i, 2] = max(vertices[0, 0], vertices[1, 0], vertices[2, 0], vertices[3, 0]) + grow
         aabb[i, 3] = max(vertices[0, 1], vertices[1, 1], vertices[2, 1], vertices[3, 1]) + grow
+    valid, cell_size, lowest_y, highest_y = _check_and_measure(aabb)
+    pairs = np.empty((0, 2), dtype=np.int64)
+    swept = True
+    if valid and n >= STRIP_GRID_MIN_BODIES and 0.0 < cell_size < math.inf:
+        bottom, top = math.floor(lowest_y / cell_size), math.floor(highest_y / cell_size)
+        if max(abs(bottom), abs(top)) < MAX_STRIP_INDEX:
+            lowest, highest, entries = _strips(aabb, cell_size, DEFAULT_MAX_STRIPS_PER_BODY)
+            if not (entries and top - bottom >= DENSE_STRIPS_PER_ENTRY * entries + 1024):
+                pairs = _grid_pairs(aabb, np.argsort(aabb[:, 0]), lowest, highest, DEFAULT_MAX_STRIPS_PER_BODY)
+                swept = False
+    if swept:
+        pairs = _swept_pairs(aabb)
+    # Not both static, not joined.
+    m = pairs.shape[0]
+    keys, key_i, key_j = np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64)
+    check_joints = jointed.shape[0] > 0 and jointed[0] != NO_PAIR
+    kept = 0
+    for k in range(m):
+        i, j = pairs[k, 0], pairs[k, 1]
+        key = i * n + j
+        keys[kept], key_i[kept], key_j[kept] = key, i, j
+        keep = dynamic[i] or dynamic[j]
+        if keep and check_joints:
+            at = np.searchsorted(jointed, key)
+            keep = not (at < jointed.shape[0] and jointed[at] == key)
+        kept += 1 if keep else 0
+    return keys[:kept], key_i[:kept], key_j[:kept]
+
+
+@njit(cache=True)
+def _swept_pairs(aabb):
+    """Every pair ``i < j`` of the boxes ``aabb`` (rows min x, min y, max x, max y) that
+    overlap or touch, sorted: a sort-and-sweep on min x, for the few bodies or the wide
+    scatters that the strip grid does not take."""
+    n = aabb.shape[0]
     rank = np.argsort(aabb[:, 0])
-    keys = np.empty(16 * n + 16, dtype=np.int64)
+    # The boxes in that order (contiguous); no branch on the y test: every pair in the
+    # x window is written, and counted if the boxes overlap along y.
+    swept = np.empty((n, 4))
+    for r in range(n):
+        for c in range(4):
+            swept[r, c] = aabb[rank[r], c]
+    first = np.empty(4 * n + 16, dtype=np.int64)
+    second = np.empty(4 * n + 16, dtype=np.int64)
     found = 0
     for r in range(n):
-        i = rank[r]
+        if found + n - r > first.shape[0]:          # room for every pair this box can add
+            first, second = _grown(first[:found], found + n - r), _grown(second[:found], found + n - r)
+        i, right, bottom, top = rank[r], swept[r, 2], swept[r, 1], swept[r, 3]
         for s in range(r + 1, n):
-            j = rank[s]
-            if aabb[j, 0] > aabb[i, 2]:
+            if swept[s, 0] > right:
                 break
-            if aabb[j, 1] > aabb[i, 3] or aabb[i, 1] > aabb[j, 3] or not (dynamic[i] or dynamic[j]):
-                continue
-            key = min(i, j) * n + max(i, j)
-            if jointed.shape[0]:
-                at = np.searchsorted(jointed, key)
-                if at < jointed.shape[0] and jointed[at] == key:
-                    continue
-            if found == keys.shape[0]:
-                grown = np.empty(2 * found, dtype=np.int64)
-                grown[:found] = keys
-                keys = grown
-            keys[found] = key
-            found += 1
-    return np.sort(keys[:found])
+            j = rank[s]
+            first[found], second[found] = min(i, j), max(i, j)
+            found += 0 if (swept[s, 1] > top) | (bottom > swept[s, 3]) else 1
+    return _sorted_grid_pairs(first[:found], second[:found], n)
 
 
 @njit(cache=True)
@@ -258,15 +301,15 @@ CIRCLE_FEATURE = 1 << 10
 
 
 @njit(cache=True)
-def _circle_manifolds(keys, n, position, radius):
+def _circle_manifolds(first, second, position, radius):
     """:func:`~solutions.narrowphase.circle_circle.collide_circle_circle` for every pair,
     laid out as the box manifolds are (one point per pair found)."""
-    m = keys.shape[0]
+    m = first.shape[0]
     found = np.zeros(m, dtype=np.bool_)
     count = np.zeros(m, dtype=np.int64)
     normal, points, separations = np.empty((m, 2)), np.empty((m, 2, 2)), np.empty((m, 2))
     for k in range(m):
-        i, j = keys[k] // n, keys[k] % n
+        i, j = first[k], second[k]
         dx, dy = position[j, 0] - position[i, 0], position[j, 1] - position[i, 1]
         distance = math.hypot(dx, dy)
         reach = radius[i] + radius[j]
@@ -418,16 +461,17 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
     old_x, old_y = old_floats[:, POINT_X], old_floats[:, POINT_Y]
     old_normal, old_tangent = old_floats[:, POINT_NORMAL_IMPULSE], old_floats[:, POINT_TANGENT_IMPULSE]
     # 1. Candidate pairs, 2. speculative manifolds of every pair.
-    keys = _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding, circles, jointed)
+    keys, key_i, key_j = _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding, circles,
+                                          jointed)
     m = keys.shape[0]
     features = np.full((m, 2), CIRCLE_FEATURE, dtype=np.int64)
     if circles:
-        found, normal, count, points, separations = _circle_manifolds(keys, n, position, half[:, 0].copy())
+        found, normal, count, points, separations = _circle_manifolds(key_i, key_j, position, half[:, 0].copy())
     else:
         centre_a, centre_b, half_a, half_b = np.empty((m, 2)), np.empty((m, 2)), np.empty((m, 2)), np.empty((m, 2))
         angle_a, angle_b = np.empty(m), np.empty(m)
         for k in range(m):
-            i, j = keys[k] // n, keys[k] % n
+            i, j = key_i[k], key_j[k]
             centre_a[k, 0], centre_a[k, 1], half_a[k, 0], half_a[k, 1] = position[i, 0], position[i, 1], half[i, 0], half[i, 1]
             centre_b[k, 0], centre_b[k, 1], half_b[k, 0], half_b[k, 1] = position[j, 0], position[j, 1], half[j, 0], half[j, 1]
             angle_a[k], angle_b[k] = angle[i], angle[j]
@@ -462,7 +506,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
             continue
         man_pair[g], man_count[g], man_first[g] = keys[k], count[k], p
         for s in range(count[k]):
-            a[p], b[p] = keys[k] // n, keys[k] % n
+            a[p], b[p] = key_i[k], key_j[k]
             nx[p], ny[p] = normal[k, 0], normal[k, 1]
             px[p], py[p] = points[k, s, 0], points[k, s, 1]
             sep[p] = separations[k, s]
@@ -526,7 +570,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
         movable[i] = inverse_mass[i] + contact_inertia[i] > 0.0
     body_a, body_b = group_ints[3], group_ints[4]
     for q in range(g_count):
-        body_a[q], body_b[q] = man_pair[q] // n, man_pair[q] % n
+        body_a[q], body_b[q] = a[man_first[q]], b[man_first[q]]
     manifold_order = _sweep_order(body_a, body_b, movable, colours)
     order, sweep_position = point_ints[4], point_ints[5]
     first, row_count = group_ints[5], group_ints[6]

@@ -53,7 +53,10 @@ from ..narrowphase.speculative import SPECULATIVE_MARGIN
 from ..joints import DistanceJoint
 from ..shapes import OBB, Circle
 from ..solver.constraint_rows import MAX_CONDITION_NUMBER
-from ..solver.kernel_numba import _sweeps
+from ..solver.kernel_numba import (GROUP_A, GROUP_B, GROUP_BLOCK, GROUP_COUNT, GROUP_FIRST, GROUP_IIA, GROUP_IIB,
+                                   GROUP_IMA, GROUP_IMB, GROUP_NX, GROUP_NY, ROW_LOWER, ROW_MASS_NORMAL, ROW_RN_A,
+                                   ROW_RN_B, SOLUTION_IMPULSE_SCALE, SOLUTION_MASS_SCALE, SOLUTION_NORMAL,
+                                   SOLUTION_TANGENT, SOLUTION_TARGET, _sweeps)
 from .soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, soft_coefficients
 from .solver_settings import SolverStats
 
@@ -330,18 +333,15 @@ def _circle_manifolds(first, second, position, radius):
 
 @njit(cache=True)
 def _joint_rows(count):
-    """Work space of :func:`_solve_joints` for ``count`` joints, made once per step:
-    per row ``a, b, nx, ny, rn_a, rn_b, ima, imb, iia, iib, mass, target, mass_scale,
-    impulse_scale, total, joint``, then the kernel's constant columns (first row of each
-    group, one row per group, no block, zeros, no lower bound)."""
-    int_rows = np.zeros((3, count), dtype=np.int64)
-    float_rows = np.zeros((13, count))
-    first = np.arange(count)
-    ones = np.ones(count, dtype=np.int64)
-    no_block = np.zeros(count, dtype=np.bool_)
-    zeros = np.zeros(count)
-    lower = np.full(count, -np.inf)
-    return int_rows, float_rows, first, ones, no_block, zeros, lower
+    """Work space of :func:`_solve_joints` for ``count`` joints, made once per step: the
+    kernel's four blocks (one group of one row per joint, no block solve, no friction,
+    no lower bound) and the joint of each row."""
+    groups = np.zeros((5, count), dtype=np.int64)
+    for k in range(count):
+        groups[GROUP_FIRST, k], groups[GROUP_COUNT, k] = k, 1
+    rows = np.zeros((8, count))
+    rows[ROW_LOWER] = -np.inf
+    return groups, np.zeros((9, count)), rows, np.zeros((6, count)), np.empty(count, dtype=np.int64)
 
 
 @njit(cache=True)
@@ -350,12 +350,14 @@ def _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, imp
     """:meth:`solutions.joints.JointSolver.solve` of the soft step on arrays: each joint
     a bilateral row of the kernel (soft rod, or spring), warm started on the biased pass;
     ``impulses`` (per joint, N s) are read and replaced; ``work`` from :func:`_joint_rows`."""
-    int_rows, float_rows, first, ones, no_block, zeros, lower = work
-    a_of, b_of, joint_of = int_rows[0], int_rows[1], int_rows[2]
-    nx, ny, rn_a, rn_b = float_rows[0], float_rows[1], float_rows[2], float_rows[3]
-    ima, imb, iia, iib = float_rows[4], float_rows[5], float_rows[6], float_rows[7]
-    mass, target, mass_scale, impulse_scale, total = (float_rows[8], float_rows[9], float_rows[10],
-                                                      float_rows[11], float_rows[12])
+    groups, group_values, rows, solution, joint_of = work
+    a_of, b_of = groups[GROUP_A], groups[GROUP_B]
+    nx, ny = group_values[GROUP_NX], group_values[GROUP_NY]
+    ima, imb, iia, iib = (group_values[GROUP_IMA], group_values[GROUP_IMB], group_values[GROUP_IIA],
+                          group_values[GROUP_IIB])
+    rn_a, rn_b, mass = rows[ROW_RN_A], rows[ROW_RN_B], rows[ROW_MASS_NORMAL]
+    total, target = solution[SOLUTION_NORMAL], solution[SOLUTION_TARGET]
+    mass_scale, impulse_scale = solution[SOLUTION_MASS_SCALE], solution[SOLUTION_IMPULSE_SCALE]
     r = 0
     for k in range(joint_a.shape[0]):
         a, b = joint_a[k], joint_b[k]
@@ -411,11 +413,13 @@ def _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, imp
                 velocity[b, 0] += imb[q] * impulse * nx[q]
                 velocity[b, 1] += imb[q] * impulse * ny[q]
                 velocity[b, 2] += iib[q] * rn_b[q] * impulse
-    zero = zeros[:r]
-    _sweeps(velocity, a_of[:r], b_of[:r], nx[:r], ny[:r], ima[:r], imb[:r], iia[:r], iib[:r], first[:r], ones[:r],
-            no_block[:r], zero, zero, zero, rn_a[:r], rn_b[:r], zero, zero, mass[:r], zero, zero, lower[:r],
-            iterations, total[:r], zeros[:r].copy(), target[:r], mass_scale[:r], impulse_scale[:r], True, False,
-            False, False)
+    if r == joint_a.shape[0]:
+        _sweeps(velocity, groups, group_values, rows, solution, iterations, True, False, False, False)
+    else:           # some joints hold two static bodies: the first r rows only
+        used = solution[:, :r].copy()
+        _sweeps(velocity, groups[:, :r].copy(), group_values[:, :r].copy(), rows[:, :r].copy(), used, iterations,
+                True, False, False, False)
+        total[:r] = used[SOLUTION_NORMAL]
     for q in range(r):
         impulses[joint_of[q]] = total[q]
 
@@ -492,7 +496,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
         return p_count
     # Each array below is a row of one of a few blocks: one allocation per block, not per
     # array (allocations were half the cost of a step of a small world).
-    group_ints = np.empty((9, g_count), np.int64)
+    group_ints = np.empty((5, g_count), np.int64)
     man_pair, man_count, man_first = group_ints[0], group_ints[1], group_ints[2]
     point_ints = np.empty((6, p_count), np.int64)
     a, b, feature, pair_key = point_ints[0], point_ints[1], point_ints[2], point_ints[3]
@@ -573,7 +577,10 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
         body_a[q], body_b[q] = a[man_first[q]], b[man_first[q]]
     manifold_order = _sweep_order(body_a, body_b, movable, colours)
     order, sweep_position = point_ints[4], point_ints[5]
-    first, row_count = group_ints[5], group_ints[6]
+    # The kernel's blocks (solutions.solver.kernel_numba): groups and rows in sweep order.
+    groups = np.zeros((5, g_count), np.int64)
+    g_a, g_b, first, row_count, block = (groups[GROUP_A], groups[GROUP_B], groups[GROUP_FIRST], groups[GROUP_COUNT],
+                                         groups[GROUP_BLOCK])
     r = 0
     for q in range(g_count):
         src = manifold_order[q]
@@ -581,11 +588,9 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
         for s in range(man_count[src]):
             order[r] = man_first[src] + s
             r += 1
-    g_a, g_b = group_ints[7], group_ints[8]
     group_floats = np.zeros((9, g_count))
     g_nx, g_ny, g_ima, g_imb, g_iia = group_floats[0], group_floats[1], group_floats[2], group_floats[3], group_floats[4]
     g_iib, k11, k12, k22 = group_floats[5], group_floats[6], group_floats[7], group_floats[8]
-    block = np.zeros(g_count, dtype=np.bool_)
     for q in range(g_count):
         k1 = order[first[q]]
         g_a[q], g_b[q], g_nx[q], g_ny[q] = a[k1], b[k1], nx[k1], ny[k1]
@@ -596,14 +601,17 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
             c22 = ima[k1] + imb[k1] + iia[k1] * rn_a[k2] * rn_a[k2] + iib[k1] * rn_b[k2] * rn_b[k2]
             c12 = ima[k1] + imb[k1] + iia[k1] * rn_a[k1] * rn_a[k2] + iib[k1] * rn_b[k1] * rn_b[k2]
             if block_solver and max(c11, c22) ** 2 < MAX_CONDITION_NUMBER * (c11 * c22 - c12 * c12):
-                block[q] = True
+                block[q] = 1
                 k11[q], k12[q], k22[q] = c11, c12, c22
-    rows_in_sweep_order = np.zeros((19, p_count))
-    row = rows_in_sweep_order
-    s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal = row[0], row[1], row[2], row[3], row[4]
-    s_mass_tangent, s_mu, lower, normal_s, tangent_s = row[5], row[6], row[7], row[8], row[9]
-    bias_rate, mass_scale_soft, impulse_scale_soft, max_normal = row[10], row[11], row[12], row[13]
-    separation, target, mass_scale, impulse_scale, zeros = row[14], row[15], row[16], row[17], row[18]
+    rows = np.zeros((8, p_count))                 # ROW_*: rn_a, rn_b, rt_a, rt_b, masses, friction, lower bound
+    s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal = rows[0], rows[1], rows[2], rows[3], rows[4]
+    s_mass_tangent, s_mu = rows[5], rows[6]
+    solution = np.zeros((6, p_count))             # SOLUTION_*: impulses, the pass's targets and scales, work
+    normal_s, tangent_s, target = solution[SOLUTION_NORMAL], solution[SOLUTION_TANGENT], solution[SOLUTION_TARGET]
+    mass_scale, impulse_scale = solution[SOLUTION_MASS_SCALE], solution[SOLUTION_IMPULSE_SCALE]
+    row_extra = np.zeros((5, p_count))
+    bias_rate, mass_scale_soft, impulse_scale_soft = row_extra[0], row_extra[1], row_extra[2]
+    max_normal, separation = row_extra[3], row_extra[4]
     for r in range(p_count):
         k = order[r]
         s_rn_a[r], s_rn_b[r], s_rt_a[r], s_rt_b[r] = rn_a[k], rn_b[k], rt_a[k], rt_b[k]
@@ -653,9 +661,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
                         mass_scale[r], impulse_scale[r] = mass_scale_soft[r], impulse_scale_soft[r]
                     else:
                         target[r], mass_scale[r], impulse_scale[r] = 0.0, 1.0, 0.0
-                _sweeps(velocity, g_a, g_b, g_nx, g_ny, g_ima, g_imb, g_iia, g_iib, first, row_count, block, k11,
-                       k12, k22, s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal, s_mass_tangent, s_mu, lower,
-                       iterations, normal_s, tangent_s, target, mass_scale, impulse_scale, True, False, True, True)
+                _sweeps(velocity, groups, group_floats, rows, solution, iterations, True, False, True, True)
                 if biased:
                     for r in range(p_count):
                         max_normal[r] = max(max_normal[r], normal_s[r])
@@ -685,15 +691,14 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
             mass_scale[r] = 1.0 if bounce else 0.0
             bouncing = bouncing or bounce
         if bouncing:
-            _sweeps(velocity, g_a, g_b, g_nx, g_ny, g_ima, g_imb, g_iia, g_iib, first, row_count, block, k11, k12,
-                   k22, s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal, s_mass_tangent, s_mu, lower, 1, normal_s,
-                   tangent_s, target, mass_scale, zeros, True, False, False, False)
+            impulse_scale[:] = 0.0
+            _sweeps(velocity, groups, group_floats, rows, solution, 1, True, False, False, False)
             _zero_static_velocities(velocity, static_members)
     for r in range(p_count):
         normal_total[order[r]], tangent_total[order[r]] = normal_s[r], tangent_s[r]
     block_count = 0
     for q in range(g_count):
-        if block[q]:
+        if block[q] != 0:
             block_count += 1
     # The points, for the caller and as the next step's warm-start memory.
     ints, floats = memory_ints[1 - last], memory_floats[1 - last]

@@ -24,7 +24,7 @@ the push of a spring.  SI units throughout.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -83,19 +83,6 @@ class ConstraintRows:
     @property
     def row_count(self) -> int:
         return len(self.rn_a)
-
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        """Every field in declaration order, with the dtypes the compiled kernel takes."""
-        out = []
-        for field in fields(self):
-            value = getattr(self, field.name)
-            if field.name in ("a", "b", "first", "count"):
-                out.append(np.ascontiguousarray(value, dtype=np.int64))
-            elif field.name == "block":
-                out.append(np.ascontiguousarray(value, dtype=np.bool_))
-            else:
-                out.append(np.ascontiguousarray(value, dtype=np.float64))
-        return tuple(out)
 
 
 def normal_block_matrix(ima, imb, iia, iib, rn_a1, rn_b1, rn_a2, rn_b2):

@@ -15,6 +15,19 @@ from numba import njit
 
 from .constraint_rows import ConstraintRows
 
+# The kernel takes the rows as four blocks (few arguments: each array a compiled
+# function takes costs it a reference count on entry and on exit, which with 29 arrays
+# was about half the cost of a pass over a small world's rows):
+#: rows of the groups' integer block (5, groups): bodies, first row, row count, block solve (0/1);
+GROUP_A, GROUP_B, GROUP_FIRST, GROUP_COUNT, GROUP_BLOCK = range(5)
+#: rows of the groups' float block (9, groups): direction, inverse masses and inertias, K;
+GROUP_NX, GROUP_NY, GROUP_IMA, GROUP_IMB, GROUP_IIA, GROUP_IIB, GROUP_K11, GROUP_K12, GROUP_K22 = range(9)
+#: rows of the rows' constant block (8, rows), as in ConstraintRows;
+ROW_RN_A, ROW_RN_B, ROW_RT_A, ROW_RT_B, ROW_MASS_NORMAL, ROW_MASS_TANGENT, ROW_FRICTION, ROW_LOWER = range(8)
+#: rows of the pass's block (6, rows): the accumulated normal and tangent impulses (read
+#: and written), the pass's target, mass scale and impulse scale, and work space.
+SOLUTION_NORMAL, SOLUTION_TANGENT, SOLUTION_TARGET, SOLUTION_MASS_SCALE, SOLUTION_IMPULSE_SCALE, SOLUTION_WORK = range(6)
+
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _block_normal_impulses(k11, k12, k22, b1, b2):
@@ -61,18 +74,31 @@ def _friction(vxa, vya, wa, vxb, vyb, wb, nx, ny, ima, imb, iia, iib, rt_a, rt_b
 
 
 @njit(cache=True, error_model="numpy")
-def _sweeps(v, a_of, b_of, nx_of, ny_of, ima_of, imb_of, iia_of, iib_of, first_of, count_of, block_of,
-            k11_of, k12_of, k22_of, rn_a, rn_b, rt_a, rt_b, mass_normal, mass_tangent, mu_of, lower_of,
-            iterations, normal, tangent, target, mass_scale, impulse_scale, accumulate,
-            friction_first, use_friction, use_block):
-    """The sweeps of :func:`solutions.solver.kernel.solve_constraints` (module docstring)."""
-    normal_change = np.zeros(normal.shape[0])
+def _sweeps(v, groups, group_values, rows, solution, iterations, accumulate, friction_first, use_friction,
+            use_block):
+    """The sweeps of :func:`solutions.solver.kernel.solve_constraints` (module docstring)
+    over the blocks ``groups``, ``group_values``, ``rows`` and ``solution`` (``GROUP_*``,
+    ``ROW_*``, ``SOLUTION_*``)."""
+    a_of, b_of, first_of, count_of = groups[GROUP_A], groups[GROUP_B], groups[GROUP_FIRST], groups[GROUP_COUNT]
+    block_of = groups[GROUP_BLOCK]
+    nx_of, ny_of = group_values[GROUP_NX], group_values[GROUP_NY]
+    ima_of, imb_of, iia_of, iib_of = (group_values[GROUP_IMA], group_values[GROUP_IMB], group_values[GROUP_IIA],
+                                      group_values[GROUP_IIB])
+    k11_of, k12_of, k22_of = group_values[GROUP_K11], group_values[GROUP_K12], group_values[GROUP_K22]
+    rn_a, rn_b, rt_a, rt_b = rows[ROW_RN_A], rows[ROW_RN_B], rows[ROW_RT_A], rows[ROW_RT_B]
+    mass_normal, mass_tangent = rows[ROW_MASS_NORMAL], rows[ROW_MASS_TANGENT]
+    mu_of, lower_of = rows[ROW_FRICTION], rows[ROW_LOWER]
+    normal, tangent, target = solution[SOLUTION_NORMAL], solution[SOLUTION_TANGENT], solution[SOLUTION_TARGET]
+    mass_scale, impulse_scale = solution[SOLUTION_MASS_SCALE], solution[SOLUTION_IMPULSE_SCALE]
+    normal_change = solution[SOLUTION_WORK]
+    for k in range(normal_change.shape[0]):
+        normal_change[k] = 0.0
     for _ in range(iterations):
         for g in range(first_of.shape[0]):
             a, b, nx, ny = a_of[g], b_of[g], nx_of[g], ny_of[g]
             ima, imb, iia, iib = ima_of[g], imb_of[g], iia_of[g], iib_of[g]
             start, stop = first_of[g], first_of[g] + count_of[g]
-            block = use_block and block_of[g]
+            block = use_block and block_of[g] != 0
             # The two bodies' velocities stay in locals while the group is solved (as
             # in the readable loop; writing them through memory at every visit made
             # each row about ten times slower: 75 against 8 ns, measured).
@@ -149,7 +175,14 @@ def solve_constraints(velocity: np.ndarray, rows: ConstraintRows, iterations: in
     for name, array in (("velocity", velocity), ("normal_total", normal_total), ("tangent_total", tangent_total)):
         if array.dtype != np.float64 or not array.flags.c_contiguous:
             raise TypeError(f"{name} must be a C-contiguous float64 array (it is updated in place)")
-    _sweeps(velocity, *rows.arrays(), int(iterations), normal_total, tangent_total,
-            np.ascontiguousarray(target, dtype=np.float64), np.ascontiguousarray(mass_scale, dtype=np.float64),
-            np.ascontiguousarray(impulse_scale, dtype=np.float64), bool(accumulate), bool(friction_first),
-            bool(use_friction), bool(use_block))
+    groups = np.array([rows.a, rows.b, rows.first, rows.count, rows.block], dtype=np.int64)
+    group_values = np.array([rows.nx, rows.ny, rows.ima, rows.imb, rows.iia, rows.iib, rows.k11, rows.k12, rows.k22],
+                            dtype=np.float64)
+    row_values = np.array([getattr(rows, name) for name in ConstraintRows.ROW_FIELDS], dtype=np.float64)
+    solution = np.zeros((6, rows.row_count))
+    solution[SOLUTION_NORMAL], solution[SOLUTION_TANGENT] = normal_total, tangent_total
+    solution[SOLUTION_TARGET], solution[SOLUTION_MASS_SCALE] = target, mass_scale
+    solution[SOLUTION_IMPULSE_SCALE] = impulse_scale
+    _sweeps(velocity, groups, group_values, row_values, solution,
+            int(iterations), bool(accumulate), bool(friction_first), bool(use_friction), bool(use_block))
+    normal_total[:], tangent_total[:] = solution[SOLUTION_NORMAL], solution[SOLUTION_TANGENT]

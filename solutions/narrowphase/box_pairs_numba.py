@@ -228,10 +228,12 @@ def _manifolds_kernel(centre_a, half_a, angle_a, centre_b, half_b, angle_b, marg
             normal[k, s] = separations[k, s] = points[k, s, 0] = points[k, s, 1] = np.nan
             vertex[k, s] = -1
 
-    vertices_a, normals_a = np.empty((4, 2)), np.empty((4, 2))
-    vertices_b, normals_b = np.empty((4, 2)), np.empty((4, 2))
-    segment, ids = np.empty((2, 2)), np.empty(2, dtype=np.int64)
-    midpoints, point_separations = np.empty((2, 2)), np.empty(2)
+    # Work space, in two blocks (each allocation costs about as much as a pair's clipping).
+    faces = np.empty((4, 4, 2))
+    vertices_a, normals_a, vertices_b, normals_b = faces[0], faces[1], faces[2], faces[3]
+    clipping = np.empty((5, 2))
+    segment, midpoints, point_separations = clipping[0:2], clipping[2:4], clipping[4]
+    ids = np.empty(2, dtype=np.int64)
     for k in range(m):
         _box_faces(centre_a[k, 0], centre_a[k, 1], half_a[k, 0], half_a[k, 1], math.cos(angle_a[k]),
                    math.sin(angle_a[k]), corner_rounding, vertices_a, normals_a)

@@ -117,7 +117,8 @@ def _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding, ci
     ``half[:, 0]`` if ``circles``."""
     n = angle.shape[0]
     aabb = np.empty((n, 4))
-    vertices, normals = np.empty((4, 2)), np.empty((4, 2))
+    faces = np.empty((2, 4, 2))
+    vertices, normals = faces[0], faces[1]
     grow = 0.5 * margin
     for i in range(n):
         if circles:
@@ -145,7 +146,8 @@ def _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding, ci
         pairs = _swept_pairs(aabb)
     # Not both static, not joined.
     m = pairs.shape[0]
-    keys, key_i, key_j = np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64)
+    kept_pairs = np.empty((3, m), dtype=np.int64)
+    keys, key_i, key_j = kept_pairs[0], kept_pairs[1], kept_pairs[2]
     kept = 0
     joined = 0          # both the pairs and the joined keys are sorted: walk them together
     for k in range(m):
@@ -259,8 +261,9 @@ def _recall(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_n
     same pair with the same feature id, else the nearest untaken one within
     ``match_distance``; their impulses go to ``normal_total``/``tangent_total``."""
     old_count = old_key.shape[0]
-    found = np.full(pair_key.shape[0], -1, dtype=np.int64)
-    unmatched = np.empty(old_count, dtype=np.int64)
+    work = np.empty(pair_key.shape[0] + old_count, dtype=np.int64)
+    found, unmatched = work[:pair_key.shape[0]], work[pair_key.shape[0]:]
+    found[:] = -1
     lo = 0
     for g in range(first_of.shape[0]):
         start, count = first_of[g], count_of[g]
@@ -357,12 +360,13 @@ def _joint_rows(count):
     """Work space of :func:`_solve_joints` for ``count`` joints, made once per step: the
     kernel's four blocks (one group of one row per joint, no block solve, no friction,
     no lower bound) and the joint of each row."""
-    groups = np.zeros((5, count), dtype=np.int64)
+    ints, floats = np.zeros((6, count), dtype=np.int64), np.zeros((23, count))
+    groups, joint_of = ints[:5], ints[5]
     for k in range(count):
         groups[GROUP_FIRST, k], groups[GROUP_COUNT, k] = k, 1
-    rows = np.zeros((8, count))
+    rows = floats[9:17]
     rows[ROW_LOWER] = -np.inf
-    return groups, np.zeros((9, count)), rows, np.zeros((6, count)), np.empty(count, dtype=np.int64)
+    return groups, floats[:9], rows, floats[17:], joint_of
 
 
 @njit(cache=True)
@@ -493,8 +497,8 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
     if circles:
         found, normal, count, points, separations = _circle_manifolds(key_i, key_j, position, half[:, 0].copy())
     else:
-        centre_a, centre_b, half_a, half_b = np.empty((m, 2)), np.empty((m, 2)), np.empty((m, 2)), np.empty((m, 2))
-        angle_a, angle_b = np.empty(m), np.empty(m)
+        poses, angles = np.empty((4, m, 2)), np.empty((2, m))
+        centre_a, centre_b, half_a, half_b, angle_a, angle_b = poses[0], poses[1], poses[2], poses[3], angles[0], angles[1]
         for k in range(m):
             i, j = key_i[k], key_j[k]
             centre_a[k, 0], centre_a[k, 1], half_a[k, 0], half_a[k, 1] = position[i, 0], position[i, 1], half[i, 0], half[i, 1]
@@ -643,7 +647,15 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
         sweep_position[k] = r                       # manifold order -> sweep order
     for k in range(p_count):
         in_contact[a[k]] = in_contact[b[k]] = True
-    static_members = np.flatnonzero(in_contact & ~dynamic)
+    static_count = 0
+    for i in range(n):
+        static_count += 1 if in_contact[i] and not dynamic[i] else 0
+    static_members = np.empty(static_count, dtype=np.int64)
+    static_count = 0
+    for i in range(n):
+        if in_contact[i] and not dynamic[i]:
+            static_members[static_count] = i
+            static_count += 1
 
     # 4. The sub-steps.
     separation[:] = sep              # manifold order; the start's for the first biased pass

@@ -200,3 +200,43 @@ def test_the_compiled_sweep_order_is_the_readable_one(order):
         movable = rng.random(n) < 0.8
         want, _ = sweep_order(body_a, body_b, movable, order)
         assert _sweep_order(body_a, body_b, movable, order == "colours").tolist() == want.tolist()
+
+
+@pytest.mark.parametrize("layout", ["few", "pile", "tall_scatter"])
+def test_the_compiled_candidate_pairs_are_the_brute_force_ones(layout):
+    """The compiled step's candidate pairs (insertion-sorted sweep for a few bodies,
+    strip grid for many, sweep again for bodies scattered over great heights) are the
+    pairs whose AABBs, grown by half the margin, overlap or touch: sorted, without two
+    static bodies, without joined pairs."""
+    from solutions.broadphase.aabb_array import aabb_array
+    from solutions.broadphase.brute_force import pairs_brute_force
+    from solutions.narrowphase.box_pairs_numba import matmul_rounding
+    from solutions.response.soft_step_numba import NO_PAIR, _candidate_pairs
+
+    rng = np.random.default_rng({"few": 1, "pile": 2, "tall_scatter": 3}[layout])
+    margin = 0.04
+    for trial in range(20):
+        n = int(rng.integers(2, 12)) if layout == "few" else int(rng.integers(64, 160))
+        position = rng.uniform(-3.0, 3.0, (n, 2))
+        if layout == "tall_scatter":       # strips would span far more heights than there are bodies
+            position[:, 1] *= 1e6
+            position[: n // 2, 1] = rng.uniform(-1.0, 1.0, n // 2)
+        half = rng.uniform(0.05, 1.0, (n, 2))
+        half[rng.integers(n)] = (0.5, 0.5)
+        angle = rng.uniform(-np.pi, np.pi, n)
+        angle[: n // 3] = 0.0                          # exactly touching boxes are kept too
+        position[1] = position[0] + (half[0, 0] + half[1, 0] + margin, 0.0)
+        angle[1] = 0.0
+        dynamic = rng.random(n) < 0.7
+        joined = sorted({min(i, j) * n + max(i, j) for i, j in rng.integers(0, n, (3, 2)) if i != j})
+        jointed = np.full(len(joined) + 2, NO_PAIR, dtype=np.int64)
+        jointed[:len(joined)] = joined
+        bodies = [Body.box(2 * hx, 2 * hy, mass=1.0, position=p, angle=a)
+                  for (hx, hy), p, a in zip(half, position, angle)]
+        aabbs = aabb_array([b.world_shape() for b in bodies]) + 0.5 * margin * np.array([-1.0, -1.0, 1.0, 1.0])
+        want = [(i, j) for i, j in sorted(pairs_brute_force(aabbs))
+                if (dynamic[i] or dynamic[j]) and i * n + j not in joined]
+        keys, first, second = _candidate_pairs(position, angle, half, dynamic, margin, matmul_rounding()[0], False,
+                                                jointed)
+        assert list(zip(first.tolist(), second.tolist())) == want, f"trial {trial}"
+        assert keys.tolist() == [i * n + j for i, j in want]

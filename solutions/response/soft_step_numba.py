@@ -9,9 +9,10 @@ This module runs the same stages, in the same order and with the same floating-p
 operations, as one compiled function over the world's
 :class:`~solutions.body_state.BodyState` arrays:
 
-1. the boxes' AABBs widened by ``SPECULATIVE_MARGIN`` and a sort-and-sweep on ``min_x``
-   for the candidate pairs, kept in the world's sorted ``(i, j)`` order, no
-   static-static pair;
+1. the boxes' AABBs widened by ``SPECULATIVE_MARGIN``, and the candidate pairs from a
+   sort-and-sweep on ``min_x`` (a few bodies) or the compiled strip grid
+   (:mod:`solutions.broadphase.grid_numba`, from ``STRIP_GRID_MIN_BODIES``), kept in
+   the world's sorted ``(i, j)`` order, no static-static pair, no joined pair;
 2. the speculative manifolds of every candidate pair
    (:mod:`solutions.narrowphase.box_pairs_numba`, itself the twin of the numpy batch);
 3. the prestep of :class:`~solutions.response.contact_preparation.ContactPreparation`

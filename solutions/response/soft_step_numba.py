@@ -479,7 +479,8 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
     substeps, iterations = switches[SWITCH_SUBSTEPS], switches[SWITCH_ITERATIONS]
     relax, use_friction = switches[SWITCH_RELAX] != 0, switches[SWITCH_FRICTION] != 0
     warm_start, block_solver = switches[SWITCH_WARM_START] != 0, switches[SWITCH_BLOCK_SOLVER] != 0
-    colours, circles, rotation = switches[SWITCH_COLOURS] != 0, switches[SWITCH_CIRCLES] != 0, switches[SWITCH_ROTATION] != 0
+    colours, circles = switches[SWITCH_COLOURS] != 0, switches[SWITCH_CIRCLES] != 0
+    rotation = switches[SWITCH_ROTATION] != 0
     corner_rounding, incident_rounding = switches[SWITCH_CORNER_ROUNDING], switches[SWITCH_INCIDENT_ROUNDING]
     joint_a, joint_b, jointed = joint_ints[JOINT_A], joint_ints[JOINT_B], joint_ints[JOINT_PAIRS]
     last = figures[FIGURE_MEMORY]
@@ -499,7 +500,8 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
         found, normal, count, points, separations = _circle_manifolds(key_i, key_j, position, half[:, 0].copy())
     else:
         poses, angles = np.empty((4, m, 2)), np.empty((2, m))
-        centre_a, centre_b, half_a, half_b, angle_a, angle_b = poses[0], poses[1], poses[2], poses[3], angles[0], angles[1]
+        centre_a, centre_b, half_a, half_b = poses[0], poses[1], poses[2], poses[3]
+        angle_a, angle_b = angles[0], angles[1]
         for k in range(m):
             i, j = key_i[k], key_j[k]
             centre_a[k, 0], centre_a[k, 1], half_a[k, 0], half_a[k, 1] = position[i, 0], position[i, 1], half[i, 0], half[i, 1]

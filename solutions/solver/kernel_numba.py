@@ -26,7 +26,8 @@ GROUP_NX, GROUP_NY, GROUP_IMA, GROUP_IMB, GROUP_IIA, GROUP_IIB, GROUP_K11, GROUP
 ROW_RN_A, ROW_RN_B, ROW_RT_A, ROW_RT_B, ROW_MASS_NORMAL, ROW_MASS_TANGENT, ROW_FRICTION, ROW_LOWER = range(8)
 #: rows of the pass's block (6, rows): the accumulated normal and tangent impulses (read
 #: and written), the pass's target, mass scale and impulse scale, and work space.
-SOLUTION_NORMAL, SOLUTION_TANGENT, SOLUTION_TARGET, SOLUTION_MASS_SCALE, SOLUTION_IMPULSE_SCALE, SOLUTION_WORK = range(6)
+(SOLUTION_NORMAL, SOLUTION_TANGENT, SOLUTION_TARGET, SOLUTION_MASS_SCALE, SOLUTION_IMPULSE_SCALE,
+ SOLUTION_WORK) = range(6)
 
 
 @njit(cache=True, inline="always", error_model="numpy")

@@ -202,22 +202,24 @@ def test_the_compiled_sweep_order_is_the_readable_one(order):
         assert _sweep_order(body_a, body_b, movable, order == "colours").tolist() == want.tolist()
 
 
-@pytest.mark.parametrize("layout", ["few", "pile", "tall_scatter"])
+@pytest.mark.parametrize("layout", ["few", "heap", "pile", "tall_scatter"])
 def test_the_compiled_candidate_pairs_are_the_brute_force_ones(layout):
     """The compiled step's candidate pairs (insertion-sorted sweep for a few bodies,
-    strip grid for many, sweep again for bodies scattered over great heights) are the
-    pairs whose AABBs, grown by half the margin, overlap or touch: sorted, without two
-    static bodies, without joined pairs."""
+    strip grid for many, sweep again for bodies scattered over great heights; a heap
+    where every box meets every other fills the sweep's first buffers) are the pairs
+    whose AABBs, grown by half the margin, overlap or touch: sorted, without two static
+    bodies, without joined pairs."""
     from solutions.broadphase.aabb_array import aabb_array
     from solutions.broadphase.brute_force import pairs_brute_force
     from solutions.narrowphase.box_pairs_numba import matmul_rounding
     from solutions.response.soft_step_numba import NO_PAIR, _candidate_pairs
 
-    rng = np.random.default_rng({"few": 1, "pile": 2, "tall_scatter": 3}[layout])
+    rng = np.random.default_rng({"few": 1, "heap": 4, "pile": 2, "tall_scatter": 3}[layout])
     margin = 0.04
     for trial in range(20):
-        n = int(rng.integers(2, 12)) if layout == "few" else int(rng.integers(64, 160))
-        position = rng.uniform(-3.0, 3.0, (n, 2))
+        n = {"few": int(rng.integers(2, 12)), "heap": int(rng.integers(20, 60))}.get(layout,
+                                                                                     int(rng.integers(64, 160)))
+        position = rng.uniform(-3.0, 3.0, (n, 2)) * (0.05 if layout == "heap" else 1.0)
         if layout == "tall_scatter":       # strips would span far more heights than there are bodies
             position[:, 1] *= 1e6
             position[: n // 2, 1] = rng.uniform(-1.0, 1.0, n // 2)

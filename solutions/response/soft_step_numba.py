@@ -190,7 +190,7 @@ def _swept_pairs(aabb):
     found = 0
     for r in range(n):
         if found + n - r > first.shape[0]:          # room for every pair this box can add
-            first, second = _grown(first[:found], found + n - r), _grown(second[:found], found + n - r)
+            first, second = _grown(first, found + n - r), _grown(second, found + n - r)
         i, right, bottom, top = rank[r], swept[r, 2], swept[r, 1], swept[r, 3]
         for s in range(r + 1, n):
             if swept[s, 0] > right:

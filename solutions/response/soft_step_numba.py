@@ -360,23 +360,30 @@ def _circle_manifolds(first, second, position, radius):
 def _joint_rows(count):
     """Work space of :func:`_solve_joints` for ``count`` joints, made once per step: the
     kernel's four blocks (one group of one row per joint, no block solve, no friction,
-    no lower bound) and the joint of each row."""
-    ints, floats = np.zeros((6, count), dtype=np.int64), np.zeros((23, count))
+    no lower bound), the joint of each row, and each row's length error (m) and inverse
+    effective mass (1/kg)."""
+    ints, floats = np.zeros((6, count), dtype=np.int64), np.zeros((25, count))
     groups, joint_of = ints[:5], ints[5]
     for k in range(count):
         groups[GROUP_FIRST, k], groups[GROUP_COUNT, k] = k, 1
     rows = floats[9:17]
     rows[ROW_LOWER] = -np.inf
-    return groups, floats[:9], rows, floats[17:], joint_of
+    return groups, floats[:9], rows, floats[17:23], joint_of, floats[23], floats[24]
 
 
 @njit(cache=True)
 def _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, impulses,
-                  inverse_mass, inverse_inertia, h, iterations, use_bias, softness, warm_starting, work):
+                  inverse_mass, inverse_inertia, h, iterations, use_bias, softness, warm_starting, work,
+                  rows_made):
     """:meth:`solutions.joints.JointSolver.solve` of the soft step on arrays: each joint
     a bilateral row of the kernel (soft rod, or spring), warm started on the biased pass;
-    ``impulses`` (per joint, N s) are read and replaced; ``work`` from :func:`_joint_rows`."""
-    groups, group_values, rows, solution, joint_of = work
+    ``impulses`` (per joint, N s) are read and replaced; ``work`` from :func:`_joint_rows`.
+
+    ``rows_made``: -1, or the rows the last call made in ``work`` if the poses have not
+    moved since (the biased pass after a relax pass): their directions, lever arms and
+    masses are the same numbers, and only the targets and scales are made again.
+    Returns the number of rows, for the next call."""
+    groups, group_values, rows, solution, joint_of, errors, inverses = work
     a_of, b_of = groups[GROUP_A], groups[GROUP_B]
     nx, ny = group_values[GROUP_NX], group_values[GROUP_NY]
     ima, imb, iia, iib = (group_values[GROUP_IMA], group_values[GROUP_IMB], group_values[GROUP_IIA],
@@ -385,7 +392,7 @@ def _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, imp
     total, target = solution[SOLUTION_NORMAL], solution[SOLUTION_TARGET]
     mass_scale, impulse_scale = solution[SOLUTION_MASS_SCALE], solution[SOLUTION_IMPULSE_SCALE]
     r = 0
-    for k in range(joint_a.shape[0]):
+    for k in range(joint_a.shape[0] if rows_made < 0 else 0):
         a, b = joint_a[k], joint_b[k]
         ca, sa, cb, sb = math.cos(angle[a]), math.sin(angle[a]), math.cos(angle[b]), math.sin(angle[b])
         anchor_ax, anchor_ay = joint_floats[k, JOINT_ANCHOR_AX], joint_floats[k, JOINT_ANCHOR_AY]
@@ -406,7 +413,17 @@ def _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, imp
         if inverse == 0.0:          # two static bodies: no row, and no impulse to remember
             impulses[k] = 0.0
             continue
-        error = distance - joint_floats[k, JOINT_LENGTH]
+        a_of[r], b_of[r], joint_of[r] = a, b, k
+        nx[r], ny[r], rn_a[r], rn_b[r] = ux, uy, cra, crb
+        ima[r], imb[r], iia[r], iib[r] = inverse_mass[a], inverse_mass[b], inverse_inertia[a], inverse_inertia[b]
+        mass[r] = 1.0 / inverse
+        errors[r], inverses[r] = distance - joint_floats[k, JOINT_LENGTH], inverse
+        r += 1
+    if rows_made >= 0:
+        r = rows_made
+    for q in range(r):
+        k = joint_of[q]
+        error, inverse = errors[q], inverses[q]
         frequency = joint_floats[k, JOINT_FREQUENCY]
         if frequency > 0:
             omega = 2 * math.pi * frequency
@@ -414,20 +431,15 @@ def _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, imp
             k_spring, c_damp = spring_mass * omega * omega, 2 * spring_mass * joint_floats[k, JOINT_DAMPING] * omega
             gamma = h * (c_damp + h * k_spring)
             gamma = 1.0 / gamma if gamma > 0 else 0.0
-            target[r] = -error * h * k_spring * gamma
-            mass_scale[r], impulse_scale[r] = inverse / (inverse + gamma), gamma / (inverse + gamma)
+            target[q] = -error * h * k_spring * gamma
+            mass_scale[q], impulse_scale[q] = inverse / (inverse + gamma), gamma / (inverse + gamma)
         elif not use_bias:
-            target[r], mass_scale[r], impulse_scale[r] = 0.0, 1.0, 0.0
+            target[q], mass_scale[q], impulse_scale[q] = 0.0, 1.0, 0.0
         else:
-            target[r], mass_scale[r], impulse_scale[r] = -softness[0] * error, softness[1], softness[2]
-        a_of[r], b_of[r], joint_of[r] = a, b, k
-        nx[r], ny[r], rn_a[r], rn_b[r] = ux, uy, cra, crb
-        ima[r], imb[r], iia[r], iib[r] = inverse_mass[a], inverse_mass[b], inverse_inertia[a], inverse_inertia[b]
-        mass[r] = 1.0 / inverse
-        total[r] = impulses[k] if (warm_starting or not use_bias) else 0.0
-        r += 1
+            target[q], mass_scale[q], impulse_scale[q] = -softness[0] * error, softness[1], softness[2]
+        total[q] = impulses[k] if (warm_starting or not use_bias) else 0.0
     if r == 0:
-        return
+        return r
     if use_bias:        # warm start: last impulses first, A then B
         for q in range(r):
             impulse = total[q]
@@ -448,6 +460,7 @@ def _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, imp
         total[:r] = used[SOLUTION_NORMAL]
     for q in range(r):
         impulses[joint_of[q]] = total[q]
+    return r
 
 
 @njit(cache=True, inline="always")
@@ -664,6 +677,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
     separation[:] = sep              # manifold order; the start's for the first biased pass
     separation_is_current = True     # (later: the relax pass's, or computed again without relax)
     joint_work = _joint_rows(joint_a.shape[0])
+    joint_rows = -1     # joint rows made at the current poses (-1: none yet)
     for _ in range(substeps):
         for i in range(n):
             if dynamic[i]:
@@ -704,7 +718,9 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
                 _zero_static_velocities(velocity, static_members)
             if biased and joint_a.shape[0]:     # the joints: soft rods after the contacts
                 _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, joint_impulses, inverse_mass,
-                              inverse_inertia, h, iterations, True, joint_softness, warm_start, joint_work)
+                              inverse_inertia, h, iterations, True, joint_softness, warm_start, joint_work,
+                              joint_rows)
+                joint_rows = -1                 # the positions move next
             if biased:      # positions between the two passes
                 for i in range(n):
                     if dynamic[i]:
@@ -713,9 +729,9 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
                     if turning[i]:
                         angle[i] += h * velocity[i, 2]
                 if relax and joint_a.shape[0]:
-                    _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, joint_impulses,
-                                  inverse_mass, inverse_inertia, h, iterations, False, joint_softness, warm_start,
-                                  joint_work)
+                    joint_rows = _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats,
+                                               joint_impulses, inverse_mass, inverse_inertia, h, iterations, False,
+                                               joint_softness, warm_start, joint_work, -1)
 
     # 5. Restitution (SoftStepSolver.end_step).
     if p_count:

@@ -165,39 +165,44 @@ def _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding, ci
 @njit(cache=True)
 def _swept_pairs(aabb):
     """Every pair ``i < j`` of the boxes ``aabb`` (rows min x, min y, max x, max y) that
-    overlap or touch, sorted: a sort-and-sweep on min x, for the few bodies or the wide
-    scatters that the strip grid does not take.  A few bodies or pairs are sorted by
-    insertion (numba's sorts cost about 0.3 us even for three values)."""
+    overlap or touch, sorted: a sort-and-sweep along the axis over which the boxes'
+    minimum corners spread wider (a hanging chain or a stack is swept along y), for the
+    few bodies or the wide scatters that the strip grid does not take.  A few bodies or
+    pairs are sorted by insertion (numba's sorts cost about 0.3 us even for three values)."""
     n = aabb.shape[0]
+    low_x, high_x, low_y, high_y = math.inf, -math.inf, math.inf, -math.inf
+    for i in range(n):
+        low_x, high_x = min(low_x, aabb[i, 0]), max(high_x, aabb[i, 0])
+        low_y, high_y = min(low_y, aabb[i, 1]), max(high_y, aabb[i, 1])
+    axis = 1 if high_y - low_y > high_x - low_x else 0          # swept along this axis,
+    other = 1 - axis                                            # tested along the other
     if n <= INSERTION_SORT_MAX:
+        # Insertion, taking the bodies from the end if they come in descending order
+        # (a chain hanging from its first link): nearly sorted input costs O(n) then.
         rank = np.empty(n, dtype=np.int64)
-        for r in range(n):
-            q = r - 1
-            while q >= 0 and aabb[rank[q], 0] > aabb[r, 0]:
+        descending = aabb[n - 1, axis] < aabb[0, axis]
+        for t in range(n):
+            r = n - 1 - t if descending else t
+            q = t - 1
+            while q >= 0 and aabb[rank[q], axis] > aabb[r, axis]:
                 rank[q + 1] = rank[q]
                 q -= 1
             rank[q + 1] = r
     else:
-        rank = np.argsort(aabb[:, 0])
-    # The boxes in that order (contiguous); no branch on the y test: every pair in the
-    # x window is written, and counted if the boxes overlap along y.
+        rank = np.argsort(aabb[:, axis])
+    # The boxes in that order (contiguous): columns min and max along the sweep, then
+    # along the other axis.  No branch on the other axis's test: every pair in the
+    # window is written, and counted if the boxes overlap along that axis too.
     swept = np.empty((n, 4))
     for r in range(n):
-        for c in range(4):
-            swept[r, c] = aabb[rank[r], c]
+        swept[r, 0], swept[r, 1] = aabb[rank[r], axis], aabb[rank[r], axis + 2]
+        swept[r, 2], swept[r, 3] = aabb[rank[r], other], aabb[rank[r], other + 2]
     first = np.empty(4 * n + 16, dtype=np.int64)
     second = np.empty(4 * n + 16, dtype=np.int64)
-    found = 0
-    for r in range(n):
-        if found + n - r > first.shape[0]:          # room for every pair this box can add
-            first, second = _grown(first, found + n - r), _grown(second, found + n - r)
-        i, right, bottom, top = rank[r], swept[r, 2], swept[r, 1], swept[r, 3]
-        for s in range(r + 1, n):
-            if swept[s, 0] > right:
-                break
-            j = rank[s]
-            first[found], second[found] = min(i, j), max(i, j)
-            found += 0 if (swept[s, 1] > top) | (bottom > swept[s, 3]) else 1
+    found, r = _sweep(swept, rank, first, second, 0, 0)
+    while r < n:            # the buffers ran short: larger ones, and on from box r
+        first, second = _grown(first, found + n - r), _grown(second, found + n - r)
+        found, r = _sweep(swept, rank, first, second, found, r)
     if found > INSERTION_SORT_MAX:
         return _sorted_grid_pairs(first[:found], second[:found], n)
     pairs = np.empty((found, 2), dtype=np.int64)
@@ -209,6 +214,27 @@ def _swept_pairs(aabb):
             q -= 1
         pairs[q + 1, 0], pairs[q + 1, 1] = i, j
     return pairs
+
+
+@njit(cache=True)
+def _sweep(swept, rank, first, second, found, start):
+    """The sweep of :func:`_swept_pairs` from box ``start`` (in sweep order) on, writing
+    pairs from ``found``; stops at the first box for whose every possible partner the
+    buffers have no room.  Returns the pairs written and where it stopped (``n``: done).
+    (A separate function: growing the buffers inside the loop made the whole sweep
+    three times slower.)"""
+    n = rank.shape[0]
+    for r in range(start, n):
+        if found + n - r > first.shape[0]:          # room for every pair this box can add
+            return found, r
+        i, reach, low, high = rank[r], swept[r, 1], swept[r, 2], swept[r, 3]
+        for s in range(r + 1, n):
+            if swept[s, 0] > reach:
+                break
+            j = rank[s]
+            first[found], second[found] = min(i, j), max(i, j)
+            found += 0 if (swept[s, 2] > high) | (low > swept[s, 3]) else 1
+    return found, n
 
 
 @njit(cache=True)

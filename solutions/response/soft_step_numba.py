@@ -512,8 +512,6 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
     gravity_x, gravity_y = parameters[PARAMETER_GRAVITY_X], parameters[PARAMETER_GRAVITY_Y]
     max_push, restitution_threshold = parameters[PARAMETER_MAX_PUSH], parameters[PARAMETER_RESTITUTION_THRESHOLD]
     match_distance, margin = parameters[PARAMETER_MATCH_DISTANCE], parameters[PARAMETER_MARGIN]
-    soft = parameters[PARAMETER_SOFT:PARAMETER_SOFT + 3]
-    stiff = parameters[PARAMETER_STIFF:PARAMETER_STIFF + 3]
     joint_softness = parameters[PARAMETER_JOINT_SOFTNESS:PARAMETER_JOINT_SOFTNESS + 3]
     substeps, iterations = switches[SWITCH_SUBSTEPS], switches[SWITCH_ITERATIONS]
     relax, use_friction = switches[SWITCH_RELAX] != 0, switches[SWITCH_FRICTION] != 0
@@ -684,8 +682,8 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
         s_rn_a[r], s_rn_b[r], s_rt_a[r], s_rt_b[r] = rn_a[k], rn_b[k], rt_a[k], rt_b[k]
         s_mass_normal[r], s_mass_tangent[r], s_mu[r] = mass_normal[k], mass_tangent[k], mu[k]
         normal_s[r], tangent_s[r] = normal_total[k], tangent_total[k]
-        coefficients = stiff if (ima[k] == 0.0 or imb[k] == 0.0) else soft
-        bias_rate[r], mass_scale_soft[r], impulse_scale_soft[r] = coefficients[0], coefficients[1], coefficients[2]
+        at = PARAMETER_STIFF if (ima[k] == 0.0 or imb[k] == 0.0) else PARAMETER_SOFT    # (not an array per row)
+        bias_rate[r], mass_scale_soft[r], impulse_scale_soft[r] = parameters[at], parameters[at + 1], parameters[at + 2]
         sweep_position[k] = r                       # manifold order -> sweep order
     for k in range(p_count):
         in_contact[a[k]] = in_contact[b[k]] = True

@@ -5,7 +5,7 @@
 
 :class:`ContactPreparation` gathers the bodies in contact and pre-computes, for every
 contact point at once, what the solver kernel needs (lever arms, effective masses,
-pair coefficients, the restitution target), puts the points in sweep order as
+pair coefficients, the closing speeds), puts the points in sweep order as
 :class:`~exercises.solver.constraint_rows.ConstraintRows`, recalls last step's
 impulses for warm starting and, after the solve, remembers this step's.  The plain
 step (:class:`~.contact_solver.ContactSolver`) and the soft step
@@ -66,8 +66,9 @@ class PreparedContacts:
     the accumulated impulses ``normal_total``, ``tangent_total`` (N s).  ``columns``
     holds the per-point arrays of the prestep in manifold order; ``rows`` the kernel's
     rows (:class:`~exercises.solver.constraint_rows.ConstraintRows`) in sweep order,
-    ``order`` maps a sweep position to its index in manifold order, and ``target``
-    is the restitution target of each point in sweep order (m/s; 0 below the threshold).
+    and ``order`` maps a sweep position to its index in manifold order.  Each solver
+    makes its restitution targets (:func:`restitution_targets`) from closing speeds it
+    measures when it needs them.
     """
 
     local: dict
@@ -94,7 +95,6 @@ class PreparedContacts:
     warm_started: int
     columns: dict
     rows: ConstraintRows
-    target: np.ndarray
     order: np.ndarray
     manifold_count: int
     point_count: int
@@ -157,10 +157,7 @@ class ContactPreparation:
 
     def prepare(self, bodies: list[Body], manifolds: list[tuple[int, int, Contact]], dt: float,
                  block_solver: bool) -> PreparedContacts:
-        """Steps 1 and 2 of :meth:`solve` and the recalled warm-start impulses (not yet applied).
-
-        The rows' ``target`` is the restitution target (0 below the threshold).
-        """
+        """Steps 1 and 2 of :meth:`solve` and the recalled warm-start impulses (not yet applied)."""
         settings = self.settings
         warm_start = settings.warm_starting and settings.accumulate_impulses
         dt_ratio = 1.0 if self._previous_dt is None else dt / self._previous_dt
@@ -208,7 +205,6 @@ class ContactPreparation:
         mass_normal = np.divide(1.0, k_normal, out=np.zeros(point_count), where=k_normal > 0.0)
         mass_tangent = np.divide(1.0, k_tangent, out=np.zeros(point_count), where=k_tangent > 0.0)
         normal_velocity = closing_speeds(velocity, a, b, nx, ny, rn_a, rn_b)
-        target = restitution_targets(normal_velocity, restitution, settings.restitution_threshold)
 
         # Last step's accumulated impulses, matched by feature id or position.
         point_keys = self._point_keys(manifolds)
@@ -219,17 +215,17 @@ class ContactPreparation:
             normal_total *= dt_ratio
             tangent_total *= dt_ratio if settings.friction else 0.0
         columns = dict(a=a, b=b, nx=nx, ny=ny, rn_a=rn_a, rn_b=rn_b, rt_a=rt_a, rt_b=rt_b, ima=ima, imb=imb,
-                       iia=iia, iib=iib, mass_normal=mass_normal, mass_tangent=mass_tangent, target=target,
+                       iia=iia, iib=iib, mass_normal=mass_normal, mass_tangent=mass_tangent,
                        friction=friction)
         rows, order = self._sweep_rows(manifolds, local, counts, inverse_mass + inverse_inertia > 0.0, columns,
                                        block_solver)
-        restitution_target = target[order]
         return PreparedContacts(local=local, members=members, velocity=velocity, centre=centre,
                                 inverse_inertia=inverse_inertia, a=a, b=b, normal=normal, point=point, depth=depth,
-                                r_a=r_a, r_b=r_b, ima=ima, imb=imb, iia=iia, iib=iib, restitution=restitution, normal_velocity=normal_velocity,
+                                r_a=r_a, r_b=r_b, ima=ima, imb=imb, iia=iia, iib=iib, restitution=restitution,
+                                normal_velocity=normal_velocity,
                                 point_keys=point_keys, normal_total=normal_total, tangent_total=tangent_total,
                                 warm_started=int(np.count_nonzero(normal_total)) if warm_start else 0,
-                                columns=columns, rows=rows, target=restitution_target, order=order,
+                                columns=columns, rows=rows, order=order,
                                 manifold_count=len(manifolds),
                                 point_count=point_count)
 

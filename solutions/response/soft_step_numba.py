@@ -398,27 +398,18 @@ def _joint_rows(count):
 
 
 @njit(cache=True)
-def _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, impulses,
-                  inverse_mass, inverse_inertia, h, iterations, use_bias, softness, warm_starting, work,
-                  rows_made):
-    """:meth:`solutions.joints.JointSolver.solve` of the soft step on arrays: each joint
-    a bilateral row of the kernel (soft rod, or spring), warm started on the biased pass;
-    ``impulses`` (per joint, N s) are read and replaced; ``work`` from :func:`_joint_rows`.
-
-    ``rows_made``: -1, or the rows the last call made in ``work`` if the poses have not
-    moved since (the biased pass after a relax pass): their directions, lever arms and
-    masses are the same numbers, and only the targets and scales are made again.
-    Returns the number of rows, for the next call."""
+def _joint_geometry(position, angle, joint_a, joint_b, joint_floats, impulses, inverse_mass, inverse_inertia, work):
+    """Each joint's row at the current poses, written into ``work`` (:func:`_joint_rows`):
+    bodies, direction, lever arms, masses, length error.  A joint between two static
+    bodies gets no row and forgets its impulse.  Returns the number of rows."""
     groups, group_values, rows, solution, joint_of, errors, inverses = work
     a_of, b_of = groups[GROUP_A], groups[GROUP_B]
     nx, ny = group_values[GROUP_NX], group_values[GROUP_NY]
     ima, imb, iia, iib = (group_values[GROUP_IMA], group_values[GROUP_IMB], group_values[GROUP_IIA],
                           group_values[GROUP_IIB])
     rn_a, rn_b, mass = rows[ROW_RN_A], rows[ROW_RN_B], rows[ROW_MASS_NORMAL]
-    total, target = solution[SOLUTION_NORMAL], solution[SOLUTION_TARGET]
-    mass_scale, impulse_scale = solution[SOLUTION_MASS_SCALE], solution[SOLUTION_IMPULSE_SCALE]
     r = 0
-    for k in range(joint_a.shape[0] if rows_made < 0 else 0):
+    for k in range(joint_a.shape[0]):
         a, b = joint_a[k], joint_b[k]
         ca, sa, cb, sb = math.cos(angle[a]), math.sin(angle[a]), math.cos(angle[b]), math.sin(angle[b])
         anchor_ax, anchor_ay = joint_floats[k, JOINT_ANCHOR_AX], joint_floats[k, JOINT_ANCHOR_AY]
@@ -445,8 +436,31 @@ def _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, imp
         mass[r] = 1.0 / inverse
         errors[r], inverses[r] = distance - joint_floats[k, JOINT_LENGTH], inverse
         r += 1
-    if rows_made >= 0:
-        r = rows_made
+    return r
+
+
+@njit(cache=True)
+def _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, impulses,
+                  inverse_mass, inverse_inertia, h, iterations, use_bias, softness, warm_starting, work,
+                  rows_made):
+    """:meth:`solutions.joints.JointSolver.solve` of the soft step on arrays: each joint
+    a bilateral row of the kernel (soft rod, or spring), warm started on the biased pass;
+    ``impulses`` (per joint, N s) are read and replaced; ``work`` from :func:`_joint_rows`.
+
+    ``rows_made``: -1, or the rows the last call made in ``work`` if the poses have not
+    moved since (the biased pass after a relax pass): their directions, lever arms and
+    masses are the same numbers, and only the targets and scales are made again.
+    Returns the number of rows, for the next call."""
+    groups, group_values, rows, solution, joint_of, errors, inverses = work
+    a_of, b_of = groups[GROUP_A], groups[GROUP_B]
+    nx, ny = group_values[GROUP_NX], group_values[GROUP_NY]
+    ima, imb, iia, iib = (group_values[GROUP_IMA], group_values[GROUP_IMB], group_values[GROUP_IIA],
+                          group_values[GROUP_IIB])
+    rn_a, rn_b = rows[ROW_RN_A], rows[ROW_RN_B]
+    total, target = solution[SOLUTION_NORMAL], solution[SOLUTION_TARGET]
+    mass_scale, impulse_scale = solution[SOLUTION_MASS_SCALE], solution[SOLUTION_IMPULSE_SCALE]
+    r = rows_made if rows_made >= 0 else _joint_geometry(position, angle, joint_a, joint_b, joint_floats, impulses,
+                                                         inverse_mass, inverse_inertia, work)
     for q in range(r):
         k = joint_of[q]
         error, inverse = errors[q], inverses[q]

@@ -211,7 +211,7 @@ def test_the_compiled_candidate_pairs_are_the_brute_force_ones(layout):
     bodies, without joined pairs."""
     from solutions.broadphase.aabb_array import aabb_array
     from solutions.broadphase.brute_force import pairs_brute_force
-    from solutions.narrowphase.box_pairs_numba import matmul_rounding
+    from solutions.narrowphase.box_pairs_numba import _faces_of_boxes, matmul_rounding
     from solutions.response.soft_step_numba import NO_PAIR, _candidate_pairs
 
     rng = np.random.default_rng({"few": 1, "heap": 4, "pile": 2, "tall_scatter": 3}[layout])
@@ -238,7 +238,8 @@ def test_the_compiled_candidate_pairs_are_the_brute_force_ones(layout):
         aabbs = aabb_array([b.world_shape() for b in bodies]) + 0.5 * margin * np.array([-1.0, -1.0, 1.0, 1.0])
         want = [(i, j) for i, j in sorted(pairs_brute_force(aabbs))
                 if (dynamic[i] or dynamic[j]) and i * n + j not in joined]
-        keys, first, second = _candidate_pairs(position, angle, half, dynamic, margin, matmul_rounding()[0], False,
-                                                jointed)
+        faces = np.empty((n, 2, 4, 2))
+        _faces_of_boxes(position, half, angle, matmul_rounding()[0], faces)
+        keys, first, second = _candidate_pairs(position, half, faces, dynamic, margin, False, jointed)
         assert list(zip(first.tolist(), second.tolist())) == want, f"trial {trial}"
         assert keys.tolist() == [i * n + j for i, j in want]

@@ -71,7 +71,7 @@ def _fma(typingctx, a, b, c):
     return signature, codegen
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _dot2(a0, a1, b0, b1, rounding):
     """``a0 * b0 + a1 * b1`` rounded as ``rounding`` says."""
     if rounding == FUSE_SECOND:
@@ -133,7 +133,7 @@ def matmul_rounding() -> tuple[int, int, bool]:
     return _ROUNDING
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _box_faces(cx, cy, hx, hy, cos, sin, corner_rounding, vertices, normals):
     """Corners and unit outward normals of one box into ``vertices``/``normals`` (4, 2),
     with the numpy version's arithmetic (``+ 0.0`` turns -0.0 into 0.0 as it does)."""
@@ -151,17 +151,26 @@ def _box_faces(cx, cy, hx, hy, cos, sin, corner_rounding, vertices, normals):
 
 
 @njit(cache=True)
-def _tolerance_scale(vertices_a, vertices_b):
-    """:func:`~solutions.narrowphase.polygon_polygon.tolerance_scale` of two (4, 2)
-    corner arrays, with its arithmetic: ``rounding_tolerance(largest absolute
+def _faces_of_boxes(centre, half, angle, corner_rounding, faces):
+    """Each box's corners and outward normals into ``faces`` (n, 2, 4, 2): ``faces[i, 0]``
+    the corners, ``faces[i, 1]`` the normals, as :func:`_box_faces` makes them."""
+    for i in range(angle.shape[0]):
+        _box_faces(centre[i, 0], centre[i, 1], half[i, 0], half[i, 1], math.cos(angle[i]), math.sin(angle[i]),
+                   corner_rounding, faces[i, 0], faces[i, 1])
+
+
+@njit(cache=True, inline="always")
+def _tolerance_scale(faces, a, b):
+    """:func:`~solutions.narrowphase.polygon_polygon.tolerance_scale` of boxes ``a`` and
+    ``b`` of ``faces``, with its arithmetic: ``rounding_tolerance(largest absolute
     coordinate, larger extent) / KEEP_POINT_TOL``."""
     size, coordinates = 0.0, 0.0
-    for vertices in (vertices_a, vertices_b):
+    for box in (a, b):
         for c in range(2):
-            low, high = vertices[0, c], vertices[0, c]
+            low, high = faces[box, 0, 0, c], faces[box, 0, 0, c]
             for i in range(4):
-                low, high = min(low, vertices[i, c]), max(high, vertices[i, c])
-                coordinates = max(coordinates, abs(vertices[i, c]))
+                low, high = min(low, faces[box, 0, i, c]), max(high, faces[box, 0, i, c])
+                coordinates = max(coordinates, abs(faces[box, 0, i, c]))
             size = max(size, high - low)
     return (_ULPS_EPS * coordinates + ROUNDOFF_SIZE_RTOL * size) / KEEP_POINT_TOL
 
@@ -169,21 +178,25 @@ def _tolerance_scale(vertices_a, vertices_b):
 @njit(cache=True)
 def _tolerance_scales(vertices_a, vertices_b):
     """``_tolerance_scale`` of every pair of (m, 4, 2) corner arrays (for the tests)."""
-    out = np.empty(vertices_a.shape[0])
-    for k in range(vertices_a.shape[0]):
-        out[k] = _tolerance_scale(vertices_a[k], vertices_b[k])
+    m = vertices_a.shape[0]
+    faces = np.zeros((2 * m, 2, 4, 2))
+    faces[0::2, 0], faces[1::2, 0] = vertices_a, vertices_b
+    out = np.empty(m)
+    for k in range(m):
+        out[k] = _tolerance_scale(faces, 2 * k, 2 * k + 1)
     return out
 
 
-@njit(cache=True)
-def _max_face_separation(ref_vertices, ref_normals, other_vertices):
-    """``max_i min_j Dot(n_i, w_j - v_i)`` and the first face ``i`` reaching it."""
+@njit(cache=True, inline="always")
+def _max_face_separation(faces, reference, other):
+    """``max_i min_j Dot(n_i, w_j - v_i)`` over the faces ``i`` of box ``reference`` and
+    the corners ``w_j`` of box ``other``, and the first face ``i`` reaching it."""
     best, best_face = -np.inf, 0
     for i in range(4):
         lowest = np.inf
         for j in range(4):
-            separation = ((other_vertices[j, 0] - ref_vertices[i, 0]) * ref_normals[i, 0]
-                          + (other_vertices[j, 1] - ref_vertices[i, 1]) * ref_normals[i, 1])
+            separation = ((faces[other, 0, j, 0] - faces[reference, 0, i, 0]) * faces[reference, 1, i, 0]
+                          + (faces[other, 0, j, 1] - faces[reference, 0, i, 1]) * faces[reference, 1, i, 1])
             if separation < lowest:
                 lowest = separation
         if lowest > best or i == 0:
@@ -191,7 +204,7 @@ def _max_face_separation(ref_vertices, ref_normals, other_vertices):
     return best, best_face
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _clip(p, ids, count, normal_x, normal_y, offset, tolerance):
     """One Sutherland-Hodgman step on ``p`` (2, 2) and ``ids`` (2,) in place; new count."""
     d0 = (p[0, 0] * normal_x + p[0, 1] * normal_y) - offset
@@ -214,7 +227,21 @@ def _clip(p, ids, count, normal_x, normal_y, offset, tolerance):
 @njit(cache=True)
 def _manifolds_kernel(centre_a, half_a, angle_a, centre_b, half_b, angle_b, margin,
                       corner_rounding, incident_rounding):
+    """The manifolds of pairs given box by box: pair ``k``'s boxes are faces ``2k`` and ``2k + 1``."""
     m = centre_a.shape[0]
+    faces = np.empty((2 * m, 2, 4, 2))
+    _faces_of_boxes(centre_a, half_a, angle_a, corner_rounding, faces[0::2])
+    _faces_of_boxes(centre_b, half_b, angle_b, corner_rounding, faces[1::2])
+    index = np.arange(2 * m)
+    return _indexed_manifolds(faces, index[0::2], index[1::2], margin, incident_rounding)
+
+
+@njit(cache=True)
+def _indexed_manifolds(faces, box_a, box_b, margin, incident_rounding):
+    """The manifolds of the pairs ``faces[box_a[k]]`` against ``faces[box_b[k]]``
+    (:func:`_faces_of_boxes`): found, normal, count, points, separations, whether B
+    holds the reference face, the reference and incident faces, and the points' vertex ids."""
+    m = box_a.shape[0]
     # Empty slots: NaN and -1 (filled by loops, which compile faster than np.full).
     found = np.zeros(m, dtype=np.bool_)
     normal, separations, points = np.empty((m, 2)), np.empty((m, 2)), np.empty((m, 2, 2))
@@ -228,45 +255,34 @@ def _manifolds_kernel(centre_a, half_a, angle_a, centre_b, half_b, angle_b, marg
             normal[k, s] = separations[k, s] = points[k, s, 0] = points[k, s, 1] = np.nan
             vertex[k, s] = -1
 
-    # Work space, in two blocks (each allocation costs about as much as a pair's clipping).
-    faces = np.empty((4, 4, 2))
-    vertices_a, normals_a, vertices_b, normals_b = faces[0], faces[1], faces[2], faces[3]
+    # Work space in one block (each allocation costs about as much as a pair's clipping).
     clipping = np.empty((5, 2))
     segment, midpoints, point_separations = clipping[0:2], clipping[2:4], clipping[4]
     ids = np.empty(2, dtype=np.int64)
     for k in range(m):
-        _box_faces(centre_a[k, 0], centre_a[k, 1], half_a[k, 0], half_a[k, 1], math.cos(angle_a[k]),
-                   math.sin(angle_a[k]), corner_rounding, vertices_a, normals_a)
-        _box_faces(centre_b[k, 0], centre_b[k, 1], half_b[k, 0], half_b[k, 1], math.cos(angle_b[k]),
-                   math.sin(angle_b[k]), corner_rounding, vertices_b, normals_b)
-        separation_a, face_a = _max_face_separation(vertices_a, normals_a, vertices_b)
-        separation_b, face_b = _max_face_separation(vertices_b, normals_b, vertices_a)
+        a, b = box_a[k], box_b[k]
+        separation_a, face_a = _max_face_separation(faces, a, b)
+        separation_b, face_b = _max_face_separation(faces, b, a)
         if not (separation_a <= margin and separation_b <= margin):
             continue
-        scale = _tolerance_scale(vertices_a, vertices_b)      # for the rounding tolerances
+        scale = _tolerance_scale(faces, a, b)      # for the rounding tolerances
         b_ref = separation_b > (separation_a + REFERENCE_FACE_RELATIVE_TOL * abs(separation_a)
                                 + REFERENCE_FACE_ABSOLUTE_TOL * scale)
-
-        if b_ref:
-            ref_vertices, ref_normals, inc_vertices, inc_normals, face = (vertices_b, normals_b, vertices_a,
-                                                                          normals_a, face_b)
-        else:
-            ref_vertices, ref_normals, inc_vertices, inc_normals, face = (vertices_a, normals_a, vertices_b,
-                                                                          normals_b, face_a)
-        n_x, n_y = ref_normals[face, 0], ref_normals[face, 1]
+        reference, incident, face = (b, a, face_b) if b_ref else (a, b, face_a)
+        n_x, n_y = faces[reference, 1, face, 0], faces[reference, 1, face, 1]
         tangent_x, tangent_y = -n_y, n_x
         face_2 = (face + 1) % 4
-        v1_x, v1_y = ref_vertices[face, 0], ref_vertices[face, 1]
-        v2_x, v2_y = ref_vertices[face_2, 0], ref_vertices[face_2, 1]
+        v1_x, v1_y = faces[reference, 0, face, 0], faces[reference, 0, face, 1]
+        v2_x, v2_y = faces[reference, 0, face_2, 0], faces[reference, 0, face_2, 1]
 
         j, lowest = 0, np.inf
         for q in range(4):
-            alignment = _dot2(inc_normals[q, 0], inc_normals[q, 1], n_x, n_y, incident_rounding)
+            alignment = _dot2(faces[incident, 1, q, 0], faces[incident, 1, q, 1], n_x, n_y, incident_rounding)
             if alignment < lowest or q == 0:
                 j, lowest = q, alignment
         j2 = (j + 1) % 4
-        segment[0, 0], segment[0, 1], ids[0] = inc_vertices[j, 0], inc_vertices[j, 1], j
-        segment[1, 0], segment[1, 1], ids[1] = inc_vertices[j2, 0], inc_vertices[j2, 1], j2
+        segment[0, 0], segment[0, 1], ids[0] = faces[incident, 0, j, 0], faces[incident, 0, j, 1], j
+        segment[1, 0], segment[1, 1], ids[1] = faces[incident, 0, j2, 0], faces[incident, 0, j2, 1], j2
 
         roundoff = KEEP_POINT_TOL * scale
         offset_2 = tangent_x * v2_x + tangent_y * v2_y

@@ -48,7 +48,7 @@ from ..contact import Contact
 from ..broadphase.grid_numba import (DENSE_STRIPS_PER_ENTRY, _check_and_measure, _grid_pairs, _grown, _strips)
 from ..broadphase.grid_numba import _sorted_pairs as _sorted_grid_pairs
 from ..broadphase.sorted_grid_numpy import DEFAULT_MAX_STRIPS_PER_BODY, MAX_STRIP_INDEX
-from ..narrowphase.box_pairs_numba import _box_faces, _manifolds_kernel, matmul_rounding
+from ..narrowphase.box_pairs_numba import _faces_of_boxes, _indexed_manifolds, matmul_rounding
 from ..narrowphase.circle_circle import COINCIDENT_CENTRES_ATOL, COINCIDENT_CENTRES_NORMAL
 from ..narrowphase.speculative import SPECULATIVE_MARGIN
 from ..joints import DistanceJoint
@@ -111,15 +111,13 @@ SWITCH_COUNT = 11
 
 
 @njit(cache=True)
-def _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding, circles, jointed):
+def _candidate_pairs(position, half, faces, dynamic, margin, circles, jointed):
     """Pairs ``i < j`` of bodies whose AABBs widened by ``margin / 2`` overlap or touch,
     not both static and not joined (``jointed``: sorted keys, padded with ``NO_PAIR``),
-    as sorted keys ``i * n + j`` and their ``i`` and ``j``; boxes, or discs of radius
-    ``half[:, 0]`` if ``circles``."""
-    n = angle.shape[0]
+    as sorted keys ``i * n + j`` and their ``i`` and ``j``; boxes of corners
+    ``faces[:, 0]`` (:func:`_faces_of_boxes`), or discs of radius ``half[:, 0]`` if ``circles``."""
+    n = position.shape[0]
     aabb = np.empty((n, 4))
-    faces = np.empty((2, 4, 2))
-    vertices, normals = faces[0], faces[1]
     grow = 0.5 * margin
     for i in range(n):
         if circles:
@@ -127,12 +125,9 @@ def _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding, ci
             aabb[i, 0], aabb[i, 1] = (position[i, 0] - r) + (-grow), (position[i, 1] - r) + (-grow)
             aabb[i, 2], aabb[i, 3] = (position[i, 0] + r) + grow, (position[i, 1] + r) + grow
             continue
-        _box_faces(position[i, 0], position[i, 1], half[i, 0], half[i, 1], math.cos(angle[i]),
-                   math.sin(angle[i]), corner_rounding, vertices, normals)
-        aabb[i, 0] = min(vertices[0, 0], vertices[1, 0], vertices[2, 0], vertices[3, 0]) + (-grow)
-        aabb[i, 1] = min(vertices[0, 1], vertices[1, 1], vertices[2, 1], vertices[3, 1]) + (-grow)
-        aabb[i, 2] = max(vertices[0, 0], vertices[1, 0], vertices[2, 0], vertices[3, 0]) + grow
-        aabb[i, 3] = max(vertices[0, 1], vertices[1, 1], vertices[2, 1], vertices[3, 1]) + grow
+        for c in range(2):      # corners 0..3 of faces[i, 0]
+            aabb[i, c] = min(faces[i, 0, 0, c], faces[i, 0, 1, c], faces[i, 0, 2, c], faces[i, 0, 3, c]) + (-grow)
+            aabb[i, 2 + c] = max(faces[i, 0, 0, c], faces[i, 0, 1, c], faces[i, 0, 2, c], faces[i, 0, 3, c]) + grow
     valid, cell_size, lowest_y, highest_y = _check_and_measure(aabb)
     pairs = np.empty((0, 2), dtype=np.int64)
     swept = True
@@ -543,23 +538,18 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
     old_x, old_y = old_floats[:, POINT_X], old_floats[:, POINT_Y]
     old_normal, old_tangent = old_floats[:, POINT_NORMAL_IMPULSE], old_floats[:, POINT_TANGENT_IMPULSE]
     # 1. Candidate pairs, 2. speculative manifolds of every pair.
-    keys, key_i, key_j = _candidate_pairs(position, angle, half, dynamic, margin, corner_rounding, circles,
-                                          jointed)
+    # Each box's corners and normals once, for both (the pairs of boxes share them).
+    faces = np.empty((0 if circles else n, 2, 4, 2))
+    if not circles:
+        _faces_of_boxes(position, half, angle, corner_rounding, faces)
+    keys, key_i, key_j = _candidate_pairs(position, half, faces, dynamic, margin, circles, jointed)
     m = keys.shape[0]
     features = np.full((m, 2), CIRCLE_FEATURE, dtype=np.int64)
     if circles:
         found, normal, count, points, separations = _circle_manifolds(key_i, key_j, position, half[:, 0].copy())
     else:
-        poses, angles = np.empty((4, m, 2)), np.empty((2, m))
-        centre_a, centre_b, half_a, half_b = poses[0], poses[1], poses[2], poses[3]
-        angle_a, angle_b = angles[0], angles[1]
-        for k in range(m):
-            i, j = key_i[k], key_j[k]
-            centre_a[k, 0], centre_a[k, 1], half_a[k, 0], half_a[k, 1] = position[i, 0], position[i, 1], half[i, 0], half[i, 1]
-            centre_b[k, 0], centre_b[k, 1], half_b[k, 0], half_b[k, 1] = position[j, 0], position[j, 1], half[j, 0], half[j, 1]
-            angle_a[k], angle_b[k] = angle[i], angle[j]
-        found, normal, count, points, separations, ref_is_b, ref_face, inc_face, vertex = _manifolds_kernel(
-            centre_a, half_a, angle_a, centre_b, half_b, angle_b, margin, corner_rounding, incident_rounding)
+        found, normal, count, points, separations, ref_is_b, ref_face, inc_face, vertex = _indexed_manifolds(
+            faces, key_i, key_j, margin, incident_rounding)
         for k in range(m):
             for s in range(count[k]):
                 features[k, s] = ((np.int64(ref_is_b[k]) * 4 + ref_face[k]) * 4 + inc_face[k]) * 4 + vertex[k, s]

@@ -52,6 +52,19 @@ from .speculative_batch import BoxManifolds
 #: ``ROUNDOFF_ULPS * EPS``, the first factor of ``rounding_tolerance`` (evaluated as there).
 _ULPS_EPS = ROUNDOFF_ULPS * EPS
 
+#: Rows of the manifolds' integer block (one column per pair): found (0 or 1), point
+#: count, whether B holds the reference face (0 or 1), the reference and incident faces,
+#: and the two points' vertex ids (-1 where no point).
+(MANIFOLD_FOUND, MANIFOLD_COUNT, MANIFOLD_REFERENCE_IS_B, MANIFOLD_REFERENCE_FACE, MANIFOLD_INCIDENT_FACE,
+ MANIFOLD_VERTEX) = range(6)
+MANIFOLD_INTS = 7
+#: Rows of their float block: the normal (from A to B), the two points' separations (m),
+#: and the two points (m) as x0, y0, x1, y1 (NaN where no point).
+MANIFOLD_NX, MANIFOLD_NY, MANIFOLD_SEPARATION, MANIFOLD_POINT = 0, 1, 2, 4
+MANIFOLD_FLOATS = 8
+#: Size of the clipping work space of :func:`_indexed_manifolds`: floats, then integers.
+CLIPPING_FLOATS, CLIPPING_INTS = 10, 2
+
 #: How a two-term dot product ``a0 * b0 + a1 * b1`` is rounded (see the module docstring).
 PLAIN, FUSE_SECOND, FUSE_FIRST = 0, 1, 2
 ROUNDING_NAMES = {PLAIN: "a0*b0 + a1*b1 (two roundings of products, one of the sum)",
@@ -233,32 +246,27 @@ def _manifolds_kernel(centre_a, half_a, angle_a, centre_b, half_b, angle_b, marg
     _faces_of_boxes(centre_a, half_a, angle_a, corner_rounding, faces[0::2])
     _faces_of_boxes(centre_b, half_b, angle_b, corner_rounding, faces[1::2])
     index = np.arange(2 * m)
-    return _indexed_manifolds(faces, index[0::2], index[1::2], margin, incident_rounding)
+    ints, floats = np.empty((MANIFOLD_INTS, m), dtype=np.int64), np.empty((MANIFOLD_FLOATS, m))
+    _indexed_manifolds(faces, index[0::2], index[1::2], margin, incident_rounding, ints, floats,
+                       np.empty(CLIPPING_FLOATS), np.empty(CLIPPING_INTS, dtype=np.int64))
+    return ints, floats
 
 
 @njit(cache=True)
-def _indexed_manifolds(faces, box_a, box_b, margin, incident_rounding):
+def _indexed_manifolds(faces, box_a, box_b, margin, incident_rounding, ints, floats, clipping_floats,
+                       clipping_ints):
     """The manifolds of the pairs ``faces[box_a[k]]`` against ``faces[box_b[k]]``
-    (:func:`_faces_of_boxes`): found, normal, count, points, separations, whether B
-    holds the reference face, the reference and incident faces, and the points' vertex ids."""
+    (:func:`_faces_of_boxes`) into ``ints`` and ``floats`` (``MANIFOLD_*`` rows, one
+    column per pair); ``clipping_*`` are work space (``CLIPPING_*`` values)."""
     m = box_a.shape[0]
-    # Empty slots: NaN and -1 (filled by loops, which compile faster than np.full).
-    found = np.zeros(m, dtype=np.bool_)
-    normal, separations, points = np.empty((m, 2)), np.empty((m, 2)), np.empty((m, 2, 2))
-    count = np.zeros(m, dtype=np.int64)
-    reference_is_b = np.zeros(m, dtype=np.bool_)
-    reference_face, incident_face = np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64)
-    vertex = np.empty((m, 2), dtype=np.int64)
-    for k in range(m):
-        reference_face[k] = incident_face[k] = -1
-        for s in range(2):
-            normal[k, s] = separations[k, s] = points[k, s, 0] = points[k, s, 1] = np.nan
-            vertex[k, s] = -1
-
-    # Work space in one block (each allocation costs about as much as a pair's clipping).
-    clipping = np.empty((5, 2))
-    segment, midpoints, point_separations = clipping[0:2], clipping[2:4], clipping[4]
-    ids = np.empty(2, dtype=np.int64)
+    found, count, reference_is_b = ints[MANIFOLD_FOUND], ints[MANIFOLD_COUNT], ints[MANIFOLD_REFERENCE_IS_B]
+    reference_face, incident_face = ints[MANIFOLD_REFERENCE_FACE], ints[MANIFOLD_INCIDENT_FACE]
+    # Empty slots: 0 and -1, NaN.
+    found[:m], count[:m], reference_is_b[:m] = 0, 0, 0
+    ints[MANIFOLD_REFERENCE_FACE:, :m] = -1
+    floats[:, :m] = np.nan
+    segment, midpoints = clipping_floats[0:4].reshape((2, 2)), clipping_floats[4:8].reshape((2, 2))
+    point_separations, ids = clipping_floats[8:10], clipping_ints
     for k in range(m):
         a, b = box_a[k], box_b[k]
         separation_a, face_a = _max_face_separation(faces, a, b)
@@ -305,23 +313,22 @@ def _indexed_manifolds(faces, box_a, box_b, margin, incident_rounding):
         if kept == 0:
             continue
         first = 0 if keep0 else 1
-        found[k] = True
+        found[k] = 1
         count[k] = kept
-        points[k, 0, 0], points[k, 0, 1] = midpoints[first, 0], midpoints[first, 1]
-        separations[k, 0] = point_separations[first]
-        vertex[k, 0] = ids[first]
+        floats[MANIFOLD_POINT, k], floats[MANIFOLD_POINT + 1, k] = midpoints[first, 0], midpoints[first, 1]
+        floats[MANIFOLD_SEPARATION, k] = point_separations[first]
+        ints[MANIFOLD_VERTEX, k] = ids[first]
         if kept == 2:
-            points[k, 1, 0], points[k, 1, 1] = midpoints[1, 0], midpoints[1, 1]
-            separations[k, 1] = point_separations[1]
-            vertex[k, 1] = ids[1]
+            floats[MANIFOLD_POINT + 2, k], floats[MANIFOLD_POINT + 3, k] = midpoints[1, 0], midpoints[1, 1]
+            floats[MANIFOLD_SEPARATION + 1, k] = point_separations[1]
+            ints[MANIFOLD_VERTEX + 1, k] = ids[1]
         if b_ref:
-            normal[k, 0], normal[k, 1] = 0.0 - n_x, 0.0 - n_y
+            floats[MANIFOLD_NX, k], floats[MANIFOLD_NY, k] = 0.0 - n_x, 0.0 - n_y
         else:
-            normal[k, 0], normal[k, 1] = n_x, n_y
+            floats[MANIFOLD_NX, k], floats[MANIFOLD_NY, k] = n_x, n_y
         reference_is_b[k] = b_ref
         reference_face[k] = face
         incident_face[k] = j
-    return found, normal, count, points, separations, reference_is_b, reference_face, incident_face, vertex
 
 
 def speculative_box_manifolds_numba(centre_a, half_a, angle_a, centre_b, half_b, angle_b,
@@ -379,7 +386,15 @@ def speculative_box_manifolds_numba(centre_a, half_a, angle_a, centre_b, half_b,
     if np.any(half_a < 0) or np.any(half_b < 0):
         raise ValueError("half-extents must be >= 0")
     corner_rounding, incident_rounding, _ = matmul_rounding()
-    arrays = _manifolds_kernel(*(np.ascontiguousarray(a) for a in (centre_a, half_a, angle_a,
-                                                                     centre_b, half_b, angle_b)),
-                               float(margin), corner_rounding, incident_rounding)
-    return BoxManifolds(*arrays)
+    ints, floats = _manifolds_kernel(*(np.ascontiguousarray(a) for a in (centre_a, half_a, angle_a,
+                                                                         centre_b, half_b, angle_b)),
+                                     float(margin), corner_rounding, incident_rounding)
+    return BoxManifolds(found=ints[MANIFOLD_FOUND].astype(bool),
+                        normal=floats[MANIFOLD_NX:MANIFOLD_NY + 1].T.copy(),
+                        count=ints[MANIFOLD_COUNT].copy(),
+                        points=floats[MANIFOLD_POINT:MANIFOLD_POINT + 4].T.reshape(m, 2, 2).copy(),
+                        separations=floats[MANIFOLD_SEPARATION:MANIFOLD_SEPARATION + 2].T.copy(),
+                        reference_is_b=ints[MANIFOLD_REFERENCE_IS_B].astype(bool),
+                        reference_face=ints[MANIFOLD_REFERENCE_FACE].copy(),
+                        incident_face=ints[MANIFOLD_INCIDENT_FACE].copy(),
+                        vertex=ints[MANIFOLD_VERTEX:MANIFOLD_VERTEX + 2].T.copy())

@@ -48,7 +48,11 @@ from ..contact import Contact
 from ..broadphase.grid_numba import (DENSE_STRIPS_PER_ENTRY, _check_and_measure, _grid_pairs, _grown, _strips)
 from ..broadphase.grid_numba import _sorted_pairs as _sorted_grid_pairs
 from ..broadphase.sorted_grid_numpy import DEFAULT_MAX_STRIPS_PER_BODY, MAX_STRIP_INDEX
-from ..narrowphase.box_pairs_numba import _faces_of_boxes, _indexed_manifolds, matmul_rounding
+from ..narrowphase.box_pairs_numba import (CLIPPING_FLOATS, CLIPPING_INTS, MANIFOLD_COUNT, MANIFOLD_FLOATS,
+                                           MANIFOLD_FOUND, MANIFOLD_INCIDENT_FACE, MANIFOLD_INTS, MANIFOLD_NX,
+                                           MANIFOLD_NY, MANIFOLD_POINT, MANIFOLD_REFERENCE_FACE,
+                                           MANIFOLD_REFERENCE_IS_B, MANIFOLD_SEPARATION, MANIFOLD_VERTEX,
+                                           _faces_of_boxes, _indexed_manifolds, matmul_rounding)
 from ..narrowphase.circle_circle import COINCIDENT_CENTRES_ATOL, COINCIDENT_CENTRES_NORMAL
 from ..narrowphase.speculative import SPECULATIVE_MARGIN
 from ..joints import DistanceJoint
@@ -350,31 +354,28 @@ CIRCLE_FEATURE = 1 << 10
 
 
 @njit(cache=True)
-def _circle_manifolds(first, second, position, radius):
-    """:func:`~solutions.narrowphase.circle_circle.collide_circle_circle` for every pair,
-    laid out as the box manifolds are (one point per pair found)."""
-    m = first.shape[0]
-    found = np.zeros(m, dtype=np.bool_)
-    count = np.zeros(m, dtype=np.int64)
-    normal, points, separations = np.empty((m, 2)), np.empty((m, 2, 2)), np.empty((m, 2))
-    for k in range(m):
+def _circle_manifolds(first, second, position, half, ints, floats):
+    """:func:`~solutions.narrowphase.circle_circle.collide_circle_circle` for every pair
+    of discs of radius ``half[:, 0]``, into ``ints`` and ``floats`` as the box manifolds
+    are (``MANIFOLD_*`` rows; one point per pair found)."""
+    ints[MANIFOLD_FOUND], ints[MANIFOLD_COUNT] = 0, 0
+    for k in range(first.shape[0]):
         i, j = first[k], second[k]
         dx, dy = position[j, 0] - position[i, 0], position[j, 1] - position[i, 1]
         distance = math.hypot(dx, dy)
-        reach = radius[i] + radius[j]
+        reach = half[i, 0] + half[j, 0]
         if distance > reach:
             continue
         if distance <= COINCIDENT_CENTRES_ATOL:
             ux, uy = COINCIDENT_CENTRES_NORMAL
         else:
             ux, uy = dx / distance, dy / distance
-        found[k], count[k] = True, 1
-        normal[k, 0], normal[k, 1] = ux, uy
-        ax, ay = position[i, 0] + radius[i] * ux, position[i, 1] + radius[i] * uy
-        bx, by = position[j, 0] - radius[j] * ux, position[j, 1] - radius[j] * uy
-        points[k, 0, 0], points[k, 0, 1] = (ax + bx) / 2, (ay + by) / 2
-        separations[k, 0] = -(reach - distance)
-    return found, normal, count, points, separations
+        ints[MANIFOLD_FOUND, k], ints[MANIFOLD_COUNT, k] = 1, 1
+        floats[MANIFOLD_NX, k], floats[MANIFOLD_NY, k] = ux, uy
+        ax, ay = position[i, 0] + half[i, 0] * ux, position[i, 1] + half[i, 0] * uy
+        bx, by = position[j, 0] - half[j, 0] * ux, position[j, 1] - half[j, 0] * uy
+        floats[MANIFOLD_POINT, k], floats[MANIFOLD_POINT + 1, k] = (ax + bx) / 2, (ay + by) / 2
+        floats[MANIFOLD_SEPARATION, k] = -(reach - distance)
 
 
 @njit(cache=True)
@@ -544,15 +545,26 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
         _faces_of_boxes(position, half, angle, corner_rounding, faces)
     keys, key_i, key_j = _candidate_pairs(position, half, faces, dynamic, margin, circles, jointed)
     m = keys.shape[0]
-    features = np.full((m, 2), CIRCLE_FEATURE, dtype=np.int64)
+    # The manifolds (MANIFOLD_* rows, one column per pair), their points' feature ids and
+    # the clipping's work space, in one block of integers and one of floats.
+    manifold_block = np.empty((MANIFOLD_INTS + 2) * m + CLIPPING_INTS, dtype=np.int64)
+    manifold_ints = manifold_block[:MANIFOLD_INTS * m].reshape((MANIFOLD_INTS, m))
+    features = manifold_block[MANIFOLD_INTS * m:(MANIFOLD_INTS + 2) * m].reshape((m, 2))
+    features[:] = CIRCLE_FEATURE
+    manifold_values = np.empty(MANIFOLD_FLOATS * m + CLIPPING_FLOATS)
+    manifold_floats = manifold_values[:MANIFOLD_FLOATS * m].reshape((MANIFOLD_FLOATS, m))
+    found, count = manifold_ints[MANIFOLD_FOUND], manifold_ints[MANIFOLD_COUNT]
     if circles:
-        found, normal, count, points, separations = _circle_manifolds(key_i, key_j, position, half[:, 0].copy())
+        _circle_manifolds(key_i, key_j, position, half, manifold_ints, manifold_floats)
     else:
-        found, normal, count, points, separations, ref_is_b, ref_face, inc_face, vertex = _indexed_manifolds(
-            faces, key_i, key_j, margin, incident_rounding)
+        _indexed_manifolds(faces, key_i, key_j, margin, incident_rounding, manifold_ints, manifold_floats,
+                           manifold_values[MANIFOLD_FLOATS * m:], manifold_block[(MANIFOLD_INTS + 2) * m:])
+        ref_is_b, ref_face = manifold_ints[MANIFOLD_REFERENCE_IS_B], manifold_ints[MANIFOLD_REFERENCE_FACE]
+        inc_face = manifold_ints[MANIFOLD_INCIDENT_FACE]
         for k in range(m):
             for s in range(count[k]):
-                features[k, s] = ((np.int64(ref_is_b[k]) * 4 + ref_face[k]) * 4 + inc_face[k]) * 4 + vertex[k, s]
+                features[k, s] = ((ref_is_b[k] * 4 + ref_face[k]) * 4 + inc_face[k]) * 4 + manifold_ints[
+                    MANIFOLD_VERTEX + s, k]
 
     # The manifolds in pair order and their points in manifold order.
     g_count = 0
@@ -580,9 +592,9 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
         man_pair[g], man_count[g], man_first[g] = keys[k], count[k], p
         for s in range(count[k]):
             a[p], b[p] = key_i[k], key_j[k]
-            nx[p], ny[p] = normal[k, 0], normal[k, 1]
-            px[p], py[p] = points[k, s, 0], points[k, s, 1]
-            sep[p] = separations[k, s]
+            nx[p], ny[p] = manifold_floats[MANIFOLD_NX, k], manifold_floats[MANIFOLD_NY, k]
+            px[p], py[p] = manifold_floats[MANIFOLD_POINT + 2 * s, k], manifold_floats[MANIFOLD_POINT + 2 * s + 1, k]
+            sep[p] = manifold_floats[MANIFOLD_SEPARATION + s, k]
             feature[p] = features[k, s]
             pair_key[p] = keys[k]
             p += 1
@@ -648,8 +660,8 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
     order, sweep_position = point_ints[4], point_ints[5]
     # The kernel's blocks (solutions.solver.kernel_numba): groups and rows in sweep order.
     groups = np.zeros((5, g_count), np.int64)
-    g_a, g_b, first, row_count, block = (groups[GROUP_A], groups[GROUP_B], groups[GROUP_FIRST], groups[GROUP_COUNT],
-                                         groups[GROUP_BLOCK])
+    g_a, g_b, first, row_count = groups[GROUP_A], groups[GROUP_B], groups[GROUP_FIRST], groups[GROUP_COUNT]
+    solved_as_block = groups[GROUP_BLOCK]
     r = 0
     for q in range(g_count):
         src = manifold_order[q]
@@ -670,7 +682,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
             c22 = ima[k1] + imb[k1] + iia[k1] * rn_a[k2] * rn_a[k2] + iib[k1] * rn_b[k2] * rn_b[k2]
             c12 = ima[k1] + imb[k1] + iia[k1] * rn_a[k1] * rn_a[k2] + iib[k1] * rn_b[k1] * rn_b[k2]
             if block_solver and max(c11, c22) ** 2 < MAX_CONDITION_NUMBER * (c11 * c22 - c12 * c12):
-                block[q] = 1
+                solved_as_block[q] = 1
                 k11[q], k12[q], k22[q] = c11, c12, c22
     rows = np.zeros((8, p_count))                 # ROW_*: rn_a, rn_b, rt_a, rt_b, masses, friction, lower bound
     s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal = rows[0], rows[1], rows[2], rows[3], rows[4]
@@ -778,7 +790,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
         normal_total[order[r]], tangent_total[order[r]] = normal_s[r], tangent_s[r]
     block_count = 0
     for q in range(g_count):
-        if block[q] != 0:
+        if solved_as_block[q] != 0:
             block_count += 1
     # The points, for the caller and as the next step's warm-start memory.
     ints, floats = memory_ints[1 - last], memory_floats[1 - last]

@@ -41,6 +41,7 @@ from numba import njit
 from .aabb_array import MAX_X, MAX_Y, MIN_X, MIN_Y, validate_aabbs
 from .sorted_grid_numpy import DEFAULT_MAX_STRIPS_PER_BODY, MAX_STRIP_INDEX, pairs_grid_numpy
 from .uniform_grid import check_cell_size, suggest_cell_size
+from ..compiled_cache import forget_stale_machine_code
 
 #: The strips are counted directly when their numbers span at most this many per entry
 #: (plus 1024); otherwise the occupied strips are numbered first (step 2).
@@ -420,3 +421,7 @@ def _sorted_pairs(first, second, n):
         start[first[p]] += 1
         pairs[row, 0], pairs[row, 1] = first[p], second[p]
     return pairs
+
+
+# Cached machine code compiled from older sources is forgotten (solutions.compiled_cache).
+forget_stale_machine_code(globals())

@@ -48,6 +48,7 @@ from .batch_sat import _as_array
 from .polygon_polygon import KEEP_POINT_TOL, REFERENCE_FACE_ABSOLUTE_TOL, REFERENCE_FACE_RELATIVE_TOL
 from .speculative import SPECULATIVE_MARGIN
 from .speculative_batch import BoxManifolds
+from ..compiled_cache import forget_stale_machine_code
 
 #: ``ROUNDOFF_ULPS * EPS``, the first factor of ``rounding_tolerance`` (evaluated as there).
 _ULPS_EPS = ROUNDOFF_ULPS * EPS
@@ -398,3 +399,7 @@ def speculative_box_manifolds_numba(centre_a, half_a, angle_a, centre_b, half_b,
                         reference_face=ints[MANIFOLD_REFERENCE_FACE].copy(),
                         incident_face=ints[MANIFOLD_INCIDENT_FACE].copy(),
                         vertex=ints[MANIFOLD_VERTEX:MANIFOLD_VERTEX + 2].T.copy())
+
+
+# Cached machine code compiled from older sources is forgotten (solutions.compiled_cache).
+forget_stale_machine_code(globals())

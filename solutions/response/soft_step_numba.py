@@ -64,6 +64,7 @@ from ..solver.kernel_numba import (GROUP_A, GROUP_B, GROUP_BLOCK, GROUP_COUNT, G
                                    SOLUTION_TANGENT, SOLUTION_TARGET, _sweeps)
 from .soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, soft_coefficients
 from .solver_settings import SolverStats
+from ..compiled_cache import forget_stale_machine_code
 
 
 #: The candidate pairs come from the strip grid of
@@ -964,3 +965,7 @@ class CompiledSoftStep:
         return list(zip(ints[:, POINT_A].tolist(), ints[:, POINT_B].tolist(),
                         zip(floats[:, POINT_X].tolist(), floats[:, POINT_Y].tolist()),
                         floats[:, POINT_NORMAL_IMPULSE].tolist(), floats[:, POINT_TANGENT_IMPULSE].tolist()))
+
+
+# Cached machine code compiled from older sources is forgotten (solutions.compiled_cache).
+forget_stale_machine_code(globals())

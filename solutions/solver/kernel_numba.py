@@ -14,6 +14,7 @@ import numpy as np
 from numba import njit
 
 from .constraint_rows import ConstraintRows
+from ..compiled_cache import forget_stale_machine_code
 
 # The kernel takes the rows as four blocks (few arguments: each array a compiled
 # function takes costs it a reference count on entry and on exit, which with 29 arrays
@@ -187,3 +188,7 @@ def solve_constraints(velocity: np.ndarray, rows: ConstraintRows, iterations: in
     _sweeps(velocity, groups, group_values, row_values, solution,
             int(iterations), bool(accumulate), bool(friction_first), bool(use_friction), bool(use_block))
     normal_total[:], tangent_total[:] = solution[SOLUTION_NORMAL], solution[SOLUTION_TANGENT]
+
+
+# Cached machine code compiled from older sources is forgotten (solutions.compiled_cache).
+forget_stale_machine_code(globals())

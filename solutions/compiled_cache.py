@@ -87,7 +87,7 @@ def forget_stale_machine_code(module_globals: dict) -> bool:
     name, file = module_globals["__name__"], module_globals["__file__"]
     caches = [value._cache for value in module_globals.values()
               if isinstance(value, Dispatcher) and value.py_func.__module__ == name
-              and hasattr(value._cache, "cache_path")]
+              and getattr(value._cache, "cache_path", None)]       # (None: not cached)
     if not caches:
         return False
     stamp = Path(caches[0].cache_path) / f"{Path(file).stem}.sources"

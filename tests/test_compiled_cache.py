@@ -78,3 +78,16 @@ def test_every_compiled_module_forgets_stale_machine_code():
         text = path.read_text()
         if "\n@njit(cache=True" in text:
             assert text.rstrip().endswith("forget_stale_machine_code(globals())"), path
+
+
+def test_a_module_without_cached_functions_has_nothing_to_forget():
+    from numba import njit
+
+    from solutions.compiled_cache import forget_stale_machine_code
+
+    def twice(x):
+        return 2 * x
+
+    module = {"__name__": __name__, "__file__": __file__, "twice": njit(cache=False)(twice)}
+    assert forget_stale_machine_code(module) is False
+    assert forget_stale_machine_code({"__name__": __name__, "__file__": __file__}) is False

@@ -86,14 +86,15 @@ def test_the_compiled_step_gives_the_readable_contacts_impulses_and_figures():
     assert readable.time == compiled.time
 
 
-def test_the_compiled_steps_point_buffers_grow_without_changing_the_motion(monkeypatch):
-    """The points live in two buffers of a capacity that grows: a step that finds more
-    points than they hold changes nothing, and runs again on bigger buffers."""
+def test_the_compiled_steps_buffers_grow_without_changing_the_motion(monkeypatch):
+    """The points and the work space live in buffers made for a number of candidate
+    pairs that grows: a step that finds more pairs than they are made for changes
+    nothing, and runs again on bigger buffers."""
     from solutions.response.soft_step_numba import CompiledSoftStep
 
     scene = get_scene("pyramid_10")
     roomy = scene.build_world(replace(scene.recommended_settings(), backend="numba"))
-    monkeypatch.setattr(CompiledSoftStep, "INITIAL_POINT_CAPACITY", 1)
+    monkeypatch.setattr(CompiledSoftStep, "INITIAL_PAIR_CAPACITY", 1)
     tight = scene.build_world(replace(scene.recommended_settings(), backend="numba"))
     capacities = set()
     for _ in range(10):
@@ -199,7 +200,9 @@ def test_the_compiled_sweep_order_is_the_readable_one(order):
         body_a, body_b = rng.integers(0, n, m), rng.integers(0, n, m)
         movable = rng.random(n) < 0.8
         want, _ = sweep_order(body_a, body_b, movable, order)
-        assert _sweep_order(body_a, body_b, movable, order == "colours").tolist() == want.tolist()
+        got = np.empty(m, dtype=np.int64)
+        _sweep_order(body_a, body_b, movable, order == "colours", np.empty(2 * m + n + 2, dtype=np.int64), got)
+        assert got.tolist() == want.tolist()
 
 
 @pytest.mark.parametrize("layout", ["few", "heap", "pile", "tall_scatter"])
@@ -240,6 +243,44 @@ def test_the_compiled_candidate_pairs_are_the_brute_force_ones(layout):
                 if (dynamic[i] or dynamic[j]) and i * n + j not in joined]
         faces = np.empty((n, 2, 4, 2))
         _faces_of_boxes(position, half, angle, matmul_rounding()[0], faces)
-        keys, first, second = _candidate_pairs(position, half, faces, dynamic, margin, False, jointed)
+        keys, first, second = _candidate_pairs(position, half, faces, dynamic, margin, False, jointed,
+                                                np.empty((n, 4)))
         assert list(zip(first.tolist(), second.tolist())) == want, f"trial {trial}"
         assert keys.tolist() == [i * n + j for i, j in want]
+
+
+EXACT_CAPACITY_RUN = """
+import numpy as np
+from dataclasses import replace
+from solutions.scenes import get_scene
+for name in ("pyramid_10", "chain_40", "overlap_recovery"):
+    scene = get_scene(name)
+    settings = replace(scene.recommended_settings(), backend="numba")
+    exact, roomy = scene.build_world(settings), scene.build_world(settings)
+    filled = 0
+    for _ in range(40):
+        exact.step(scene.dt)
+        roomy.step(scene.dt)
+        step = exact.compiled_soft_step
+        filled += step.capacity == max(step.candidate_pairs, 1)
+        step.make_buffers(max(step.candidate_pairs, 1))   # the next step may fill every block to its end
+        assert np.array_equal(exact.state.position, roomy.state.position), name
+        assert np.array_equal(exact.state.velocity, roomy.state.velocity), name
+    assert filled >= 10, (name, filled)     # steps that found exactly as many pairs as the last
+print("ok")
+"""
+
+
+def test_the_compiled_step_stays_within_its_buffers_when_it_fills_them(tmp_path):
+    """With the buffers made for exactly as many candidate pairs as the step finds (every
+    pair of a pyramid gives two points), no block of the work space runs past its end:
+    numba's bounds checks on (NUMBA_BOUNDSCHECK, compiled afresh in its own cache), no
+    IndexError, and the motion is that of buffers with room to spare."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "NUMBA_BOUNDSCHECK": "1", "NUMBA_CACHE_DIR": str(tmp_path)}
+    result = subprocess.run([sys.executable, "-c", EXACT_CAPACITY_RUN], env=env, capture_output=True, text=True,
+                            timeout=600, cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    assert result.returncode == 0 and result.stdout.strip() == "ok", result.stderr[-3000:]

@@ -1,4 +1,4 @@
-"""The soft step compiled whole, for worlds of boxes: the twin of :meth:`World.step`'s soft step.
+"""The soft step compiled whole, for worlds of boxes or of discs: the twin of :meth:`World.step`'s soft step.
 
 :meth:`solutions.world.World.step` with ``soft_step`` is the teaching text: broad phase, speculative
 narrow phase, prestep, warm start, soft solve and relax per sub-step, restitution and
@@ -24,12 +24,22 @@ operations, as one compiled function over the world's
 5. restitution, and the impulses remembered for the next step.
 
 It covers a world whose every body is a box (``Body.box``: an OBB centred on the body)
-without joints or bullets, with rotation and accumulated impulses on; chosen by
-``WorldSettings(backend="numba", soft_step=True)`` (:attr:`World.compiled_soft_step`),
-every other world runs the readable stages with their compiled twins.  Tested equal
-to the readable step to 1e-12 on every box scene over 1 s and on random piles
-(``tests/test_soft_step_numba.py``).  Contacts are made into
+or every body a disc (``Body.circle``), with distance joints, without bullets under
+continuous detection, with accumulated impulses on (:meth:`CompiledSoftStep.supports`);
+chosen by ``WorldSettings(backend="numba", soft_step=True)``
+(:attr:`World.compiled_soft_step`), every other world runs the readable stages with
+their compiled twins.  Tested equal to the readable step to 1e-12 on every box scene
+over 1 s, on random piles and on disc chains (``tests/test_soft_step_numba.py``).  Contacts are made into
 :class:`~solutions.contact.Contact` objects only when asked for (``world.manifolds``).
+
+Memory: the step allocates only its candidate pairs.  Everything else lives in arrays the
+:class:`CompiledSoftStep` keeps between steps, made for a number of candidate pairs that
+grows when a step finds more (the step then returns, having changed nothing, and runs
+again): two buffers of contact points, the last step's (its warm start) and this
+step's, and a work space of integers and of floats (:func:`_work_sizes`) from which the
+step takes each of its blocks in turn.  After the candidate pairs, the step runs in a
+function compiled without reference counts (:func:`_step_on_pairs`), where the many
+views it makes of its blocks cost nothing.
 
 Conventions: SI units; normal from body ``i`` to body ``j`` of a pair ``i < j``; a
 feature id ``(ref, face, incident_face, vertex)`` is stored as the integer
@@ -65,6 +75,7 @@ from ..solver.kernel_numba import (GROUP_A, GROUP_B, GROUP_BLOCK, GROUP_COUNT, G
 from .soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, soft_coefficients
 from .solver_settings import SolverStats
 from ..compiled_cache import forget_stale_machine_code
+from ..no_alias_compiler import NoAliasCompiler
 
 
 #: The candidate pairs come from the strip grid of
@@ -116,13 +127,36 @@ SWITCH_COUNT = 11
 
 
 @njit(cache=True)
-def _candidate_pairs(position, half, faces, dynamic, margin, circles, jointed):
+def _work_sizes(bodies, joints, pairs):
+    """Integers and floats of the step's work space (``work_ints``, ``work_floats``) for
+    ``bodies`` bodies, ``joints`` joints and up to ``pairs`` candidate pairs (up to
+    ``pairs`` manifolds and ``2 * pairs`` points; the last step's points are up to
+    ``2 * pairs`` too).  Each block is counted where :func:`_soft_step` takes it."""
+    ints = (2 * pairs + MANIFOLD_INTS * pairs + CLIPPING_INTS    # features, manifolds, clipping
+            + 5 * pairs + 6 * 2 * pairs + 2 * bodies             # groups and points in pair order, body flags
+            + 3 * pairs + bodies + 2                             # the sweep order
+            + 5 * pairs + bodies + 6 * joints                    # the kernel's groups, static bodies, joints
+            + 2 * pairs + 2 * pairs)                             # the warm start's matching
+    floats = (26 * bodies + MANIFOLD_FLOATS * pairs + CLIPPING_FLOATS    # faces, AABBs, bodies; manifolds
+              + 27 * 2 * pairs + 9 * pairs + (8 + 6 + 5) * 2 * pairs     # points, groups, rows
+              + 25 * joints)
+    return ints, floats
+
+
+@njit(cache=True, inline="always")
+def _take(work, at, size):
+    """``size`` values of the work space ``work`` from ``at``, and where the next block starts."""
+    return work[at:at + size], at + size
+
+
+@njit(cache=True)
+def _candidate_pairs(position, half, faces, dynamic, margin, circles, jointed, aabb):
     """Pairs ``i < j`` of bodies whose AABBs widened by ``margin / 2`` overlap or touch,
     not both static and not joined (``jointed``: sorted keys, padded with ``NO_PAIR``),
     as sorted keys ``i * n + j`` and their ``i`` and ``j``; boxes of corners
-    ``faces[:, 0]`` (:func:`_faces_of_boxes`), or discs of radius ``half[:, 0]`` if ``circles``."""
+    ``faces[:, 0]`` (:func:`_faces_of_boxes`), or discs of radius ``half[:, 0]`` if
+    ``circles``.  ``aabb`` (n, 4) is work space."""
     n = position.shape[0]
-    aabb = np.empty((n, 4))
     grow = 0.5 * margin
     for i in range(n):
         if circles:
@@ -237,13 +271,17 @@ def _sweep(swept, rank, first, second, found, start):
     return found, n
 
 
-@njit(cache=True)
-def _sweep_order(body_a, body_b, movable, colours):
-    """:func:`solutions.solver.sweep_order.sweep_order`'s order (its batches, stably sorted)."""
-    m = body_a.shape[0]
-    batch = np.empty(m, dtype=np.int64)
+@njit(cache=True, _nrt=False)     # (without reference counts: see _step_on_pairs)
+def _sweep_order(body_a, body_b, movable, colours, work, order):
+    """:func:`solutions.solver.sweep_order.sweep_order`'s order (its batches, stably
+    sorted) into ``order``; ``work`` holds ``2 * m + n + 2`` integers for ``m``
+    manifolds and ``n`` bodies."""
+    m, n = body_a.shape[0], movable.shape[0]
+    batch, per_body, start = work[:m], work[m:m + n], work[m + n:2 * m + n + 2]
+    per_body[:] = 0
+    start[:] = 0
     if colours:
-        used = np.zeros(movable.shape[0], dtype=np.int64)     # bit c: the body has colour c
+        used = per_body     # bit c: the body has colour c
         for k in range(m):
             i, j = body_a[k], body_b[k]
             taken = (used[i] if movable[i] else 0) | (used[j] if movable[j] else 0)
@@ -258,7 +296,7 @@ def _sweep_order(body_a, body_b, movable, colours):
             if movable[j]:
                 used[j] |= 1 << c
     else:
-        after = np.zeros(movable.shape[0], dtype=np.int64)
+        after = per_body    # the first batch after the body's last manifold
         for k in range(m):
             i, j = body_a[k], body_b[k]
             c = max(after[i] if movable[i] else 0, after[j] if movable[j] else 0)
@@ -269,26 +307,23 @@ def _sweep_order(body_a, body_b, movable, colours):
                 after[j] = c + 1
     # A stable sort by batch (a counting sort: batches are small numbers; numba's
     # mergesort took 15 us for 590 manifolds, this 1 us).
-    start = np.zeros(m + 2, dtype=np.int64)
     for k in range(m):
         start[batch[k] + 1] += 1
     for c in range(1, m + 2):
         start[c] += start[c - 1]
-    order = np.empty(m, dtype=np.int64)
     for k in range(m):
         order[start[batch[k]]] = k
         start[batch[k]] += 1
-    return order
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)     # (without reference counts: see _step_on_pairs)
 def _recall(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_normal, old_tangent,
-            first_of, count_of, match_distance, normal_total, tangent_total):
+            first_of, count_of, match_distance, normal_total, tangent_total, work):
     """``ContactPreparation._recall_impulses`` on arrays: per point, the old point of the
     same pair with the same feature id, else the nearest untaken one within
-    ``match_distance``; their impulses go to ``normal_total``/``tangent_total``."""
+    ``match_distance``; their impulses go to ``normal_total``/``tangent_total``.
+    ``work`` holds as many integers as there are points, new and old."""
     old_count = old_key.shape[0]
-    work = np.empty(pair_key.shape[0] + old_count, dtype=np.int64)
     found, unmatched = work[:pair_key.shape[0]], work[pair_key.shape[0]:]
     found[:] = -1
     lo = 0
@@ -379,13 +414,15 @@ def _circle_manifolds(first, second, position, half, ints, floats):
         floats[MANIFOLD_SEPARATION, k] = -(reach - distance)
 
 
-@njit(cache=True)
-def _joint_rows(count):
-    """Work space of :func:`_solve_joints` for ``count`` joints, made once per step: the
-    kernel's four blocks (one group of one row per joint, no block solve, no friction,
-    no lower bound), the joint of each row, and each row's length error (m) and inverse
-    effective mass (1/kg)."""
-    ints, floats = np.zeros((6, count), dtype=np.int64), np.zeros((25, count))
+@njit(cache=True, inline="always")     # (returns views: inlined into _step_on_pairs)
+def _joint_rows(ints, floats):
+    """Work space of :func:`_solve_joints` for ``count`` joints, made once per step from
+    ``ints`` (6, count) and ``floats`` (25, count): the kernel's four blocks (one group
+    of one row per joint, no block solve, no friction, no lower bound), the joint of
+    each row, and each row's length error (m) and inverse effective mass (1/kg)."""
+    count = ints.shape[1]
+    ints[:] = 0
+    floats[:] = 0.0
     groups, joint_of = ints[:5], ints[5]
     for k in range(count):
         groups[GROUP_FIRST, k], groups[GROUP_COUNT, k] = k, 1
@@ -491,10 +528,8 @@ def _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, imp
     if r == joint_a.shape[0]:
         _sweeps(velocity, groups, group_values, rows, solution, iterations, True, False, False, False)
     else:           # some joints hold two static bodies: the first r rows only
-        used = solution[:, :r].copy()
-        _sweeps(velocity, groups[:, :r].copy(), group_values[:, :r].copy(), rows[:, :r].copy(), used, iterations,
-                True, False, False, False)
-        total[:r] = used[SOLUTION_NORMAL]
+        _sweeps(velocity, groups[:, :r], group_values[:, :r], rows[:, :r], solution[:, :r], iterations, True, False,
+                False, False)
     for q in range(r):
         impulses[joint_of[q]] = total[q]
     return r
@@ -510,15 +545,43 @@ def _zero_static_velocities(velocity, static_members):
 
 
 @njit(cache=True)
-def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints, memory_floats, figures,
-               parameters, switches, joint_ints, joint_floats, joint_impulses):
+def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints, memory_floats, work_ints,
+               work_floats, figures, parameters, switches, joint_ints, joint_floats, joint_impulses):
     """One soft step of the world (module docstring): ``parameters`` and ``switches``
     (``PARAMETER_*``, ``SWITCH_*``), the bodies' and joints' constants (``BODY_*``,
     ``JOINT_*``).  The contact points (``POINT_*``) live in two buffers,
-    ``memory_*[0]`` and ``memory_*[1]``: the step reads the last step's from the one
-    ``figures`` names and writes its own into the other, then updates ``figures``
-    (``FIGURE_*``).  Returns 0, or, having changed nothing, the number of points the
-    buffers must hold for this step."""
+    ``memory_*[0]`` and ``memory_*[1]``, of ``2 * capacity`` points each: the step reads
+    the last step's from the one ``figures`` names and writes its own into the other,
+    then updates ``figures`` (``FIGURE_*``).  Every other array of the step is a view of
+    ``work_ints`` and ``work_floats`` (:func:`_work_sizes` for ``capacity`` pairs).
+    Returns 0, or, having changed nothing, the number of candidate pairs the buffers
+    must be made for (more than ``capacity``)."""
+    # 1. Candidate pairs (from each box's corners, made once: the pairs' manifolds use them too).
+    n = angle.shape[0]
+    faces = work_floats[:16 * n].reshape((n, 2, 4, 2))
+    if switches[SWITCH_CIRCLES] == 0:
+        _faces_of_boxes(position, bodies[:, 0:2], angle, switches[SWITCH_CORNER_ROUNDING], faces)
+    keys, key_i, key_j = _candidate_pairs(position, bodies[:, 0:2], faces, dynamic, parameters[PARAMETER_MARGIN],
+                                          switches[SWITCH_CIRCLES] != 0, joint_ints[JOINT_PAIRS],
+                                          work_floats[16 * n:20 * n].reshape((n, 4)))
+    return _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turning, bodies, memory_ints,
+                          memory_floats, work_ints, work_floats, figures, parameters, switches, joint_ints,
+                          joint_floats, joint_impulses)
+
+
+#: Compiled without numba's reference counts (``_nrt=False``): each array view a
+#: function makes (a row of a block) otherwise costs an atomic increment and decrement
+#: of its parent's count, and on a three-box world those were two thirds of the step
+#: (perf: NRT_incref and NRT_decref).  Such a function, and every function it calls, may
+#: make views but no new array, nor return one: every array here is an argument or a view
+#: of one, and the caller holds the arguments for the whole call.  Its arguments are
+#: distinct arrays, which LLVM is told (:class:`~solutions.no_alias_compiler.NoAliasCompiler`).
+@njit(cache=True, _nrt=False, pipeline_class=NoAliasCompiler)
+def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turning, bodies, memory_ints,
+                   memory_floats, work_ints, work_floats, figures, parameters, switches, joint_ints, joint_floats,
+                   joint_impulses):
+    """The rest of :func:`_soft_step` from the candidate pairs ``keys`` (``i * n + j``),
+    ``key_i`` and ``key_j``: manifolds, prestep, sub-steps, restitution, memory."""
     dt_ratio, h = parameters[PARAMETER_DT_RATIO], parameters[PARAMETER_H]
     gravity_x, gravity_y = parameters[PARAMETER_GRAVITY_X], parameters[PARAMETER_GRAVITY_Y]
     max_push, restitution_threshold = parameters[PARAMETER_MAX_PUSH], parameters[PARAMETER_RESTITUTION_THRESHOLD]
@@ -539,27 +602,28 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
     old_key, old_feature = old_ints[:, POINT_PAIR], old_ints[:, POINT_FEATURE]
     old_x, old_y = old_floats[:, POINT_X], old_floats[:, POINT_Y]
     old_normal, old_tangent = old_floats[:, POINT_NORMAL_IMPULSE], old_floats[:, POINT_TANGENT_IMPULSE]
-    # 1. Candidate pairs, 2. speculative manifolds of every pair.
-    # Each box's corners and normals once, for both (the pairs of boxes share them).
-    faces = np.empty((0 if circles else n, 2, 4, 2))
-    if not circles:
-        _faces_of_boxes(position, half, angle, corner_rounding, faces)
-    keys, key_i, key_j = _candidate_pairs(position, half, faces, dynamic, margin, circles, jointed)
+    # 2. Speculative manifolds of every pair.  Work space: blocks taken in turn from
+    # work_ints (at ``ii``) and work_floats (at ``fi``), after the faces and AABBs.
+    faces = work_floats[:16 * n].reshape((n, 2, 4, 2))
+    fi = 20 * n
     m = keys.shape[0]
-    # The manifolds (MANIFOLD_* rows, one column per pair), their points' feature ids and
-    # the clipping's work space, in one block of integers and one of floats.
-    manifold_block = np.empty((MANIFOLD_INTS + 2) * m + CLIPPING_INTS, dtype=np.int64)
-    manifold_ints = manifold_block[:MANIFOLD_INTS * m].reshape((MANIFOLD_INTS, m))
-    features = manifold_block[MANIFOLD_INTS * m:(MANIFOLD_INTS + 2) * m].reshape((m, 2))
+    if 2 * m > memory_ints.shape[1]:
+        return m
+    block, ii = _take(work_ints, 0, 2 * m)
+    features = block.reshape((m, 2))
     features[:] = CIRCLE_FEATURE
-    manifold_values = np.empty(MANIFOLD_FLOATS * m + CLIPPING_FLOATS)
-    manifold_floats = manifold_values[:MANIFOLD_FLOATS * m].reshape((MANIFOLD_FLOATS, m))
+    block, ii = _take(work_ints, ii, MANIFOLD_INTS * m)
+    manifold_ints = block.reshape((MANIFOLD_INTS, m))
+    block, fi = _take(work_floats, fi, MANIFOLD_FLOATS * m)
+    manifold_floats = block.reshape((MANIFOLD_FLOATS, m))
     found, count = manifold_ints[MANIFOLD_FOUND], manifold_ints[MANIFOLD_COUNT]
     if circles:
         _circle_manifolds(key_i, key_j, position, half, manifold_ints, manifold_floats)
     else:
+        clipping_floats, fi = _take(work_floats, fi, CLIPPING_FLOATS)
+        clipping_ints, ii = _take(work_ints, ii, CLIPPING_INTS)
         _indexed_manifolds(faces, key_i, key_j, margin, incident_rounding, manifold_ints, manifold_floats,
-                           manifold_values[MANIFOLD_FLOATS * m:], manifold_block[(MANIFOLD_INTS + 2) * m:])
+                           clipping_floats, clipping_ints)
         ref_is_b, ref_face = manifold_ints[MANIFOLD_REFERENCE_IS_B], manifold_ints[MANIFOLD_REFERENCE_FACE]
         inc_face = manifold_ints[MANIFOLD_INCIDENT_FACE]
         for k in range(m):
@@ -574,15 +638,16 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
         if found[k]:
             g_count += 1
             p_count += count[k]
-    if p_count > memory_ints.shape[1]:
-        return p_count
-    # Each array below is a row of one of a few blocks: one allocation per block, not per
-    # array (allocations were half the cost of a step of a small world).
-    group_ints = np.empty((5, g_count), np.int64)
+    # Each array below is a row of a block of the work space (allocations were half the
+    # cost of a step of a small world).
+    block, ii = _take(work_ints, ii, 5 * g_count)
+    group_ints = block.reshape((5, g_count))
     man_pair, man_count, man_first = group_ints[0], group_ints[1], group_ints[2]
-    point_ints = np.empty((6, p_count), np.int64)
+    block, ii = _take(work_ints, ii, 6 * p_count)
+    point_ints = block.reshape((6, p_count))
     a, b, feature, pair_key = point_ints[0], point_ints[1], point_ints[2], point_ints[3]
-    points_in_order = np.empty((27, p_count))      # manifold order
+    block, fi = _take(work_floats, fi, 27 * p_count)
+    points_in_order = block.reshape((27, p_count))      # manifold order
     nx, ny, px, py, sep = (points_in_order[0], points_in_order[1], points_in_order[2], points_in_order[3],
                            points_in_order[4])
     g = 0
@@ -603,11 +668,16 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
 
     # 3. The prestep (ContactPreparation.prepare and SoftStepSolver.begin_step).
     # Without rotation the contacts see no inertia and no angular velocity.
-    body_floats = np.zeros((4, n))
+    block, fi = _take(work_floats, fi, 6 * n)
+    body_floats = block[:4 * n].reshape((4, n))
+    body_floats[:] = 0.0
     contact_inertia = inverse_inertia if rotation else body_floats[0]
     start_angle, body_cos_less_1, body_sin = body_floats[1], body_floats[2], body_floats[3]
-    start_angle[:] = angle
-    centre = position.copy()
+    for i in range(n):      # (loops, not slice copies: those may allocate, to guard against overlap)
+        start_angle[i] = angle[i]
+    centre = block[4 * n:].reshape((n, 2))
+    for i in range(n):
+        centre[i, 0], centre[i, 1] = position[i, 0], position[i, 1]
     column = points_in_order
     depth, rn_a, rn_b, rt_a, rt_b = column[5], column[6], column[7], column[8], column[9]
     r_dot_n_a, r_dot_n_b, ima, imb, iia, iib = column[10], column[11], column[12], column[13], column[14], column[15]
@@ -638,8 +708,9 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
     normal_total[:] = 0.0
     tangent_total[:] = 0.0
     if warm_start:
+        recall_work, _ = _take(work_ints, ii, p_count + old_key.shape[0])
         _recall(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_normal, old_tangent,
-                man_first, man_count, match_distance, normal_total, tangent_total)
+                man_first, man_count, match_distance, normal_total, tangent_total, recall_work)
         for k in range(p_count):
             normal_total[k] *= dt_ratio
             tangent_total[k] *= dt_ratio if use_friction else 0.0
@@ -650,17 +721,24 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
                 warm_started += 1
 
     # The rows in sweep order (ContactPreparation._sweep_rows).
-    body_flags = np.zeros((2, n), dtype=np.bool_)
+    ii += p_count + old_key.shape[0]      # (the matching's work space)
+    block, ii = _take(work_ints, ii, 2 * n)
+    body_flags = block.reshape((2, n))
+    body_flags[:] = 0
     movable, in_contact = body_flags[0], body_flags[1]
     for i in range(n):
         movable[i] = inverse_mass[i] + contact_inertia[i] > 0.0
     body_a, body_b = group_ints[3], group_ints[4]
     for q in range(g_count):
         body_a[q], body_b[q] = a[man_first[q]], b[man_first[q]]
-    manifold_order = _sweep_order(body_a, body_b, movable, colours)
+    block, ii = _take(work_ints, ii, 2 * g_count + n + 2)
+    manifold_order, ii = _take(work_ints, ii, g_count)
+    _sweep_order(body_a, body_b, movable, colours, block, manifold_order)
     order, sweep_position = point_ints[4], point_ints[5]
     # The kernel's blocks (solutions.solver.kernel_numba): groups and rows in sweep order.
-    groups = np.zeros((5, g_count), np.int64)
+    block, ii = _take(work_ints, ii, 5 * g_count)
+    groups = block.reshape((5, g_count))
+    groups[:] = 0
     g_a, g_b, first, row_count = groups[GROUP_A], groups[GROUP_B], groups[GROUP_FIRST], groups[GROUP_COUNT]
     solved_as_block = groups[GROUP_BLOCK]
     r = 0
@@ -670,7 +748,9 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
         for s in range(man_count[src]):
             order[r] = man_first[src] + s
             r += 1
-    group_floats = np.zeros((9, g_count))
+    block, fi = _take(work_floats, fi, 9 * g_count)
+    group_floats = block.reshape((9, g_count))
+    group_floats[:] = 0.0
     g_nx, g_ny, g_ima, g_imb, g_iia = group_floats[0], group_floats[1], group_floats[2], group_floats[3], group_floats[4]
     g_iib, k11, k12, k22 = group_floats[5], group_floats[6], group_floats[7], group_floats[8]
     for q in range(g_count):
@@ -685,13 +765,15 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
             if block_solver and max(c11, c22) ** 2 < MAX_CONDITION_NUMBER * (c11 * c22 - c12 * c12):
                 solved_as_block[q] = 1
                 k11[q], k12[q], k22[q] = c11, c12, c22
-    rows = np.zeros((8, p_count))                 # ROW_*: rn_a, rn_b, rt_a, rt_b, masses, friction, lower bound
+    block, fi = _take(work_floats, fi, 19 * p_count)
+    block[:] = 0.0
+    rows = block[:8 * p_count].reshape((8, p_count))    # ROW_*: rn_a, rn_b, rt_a, rt_b, masses, friction, lower bound
     s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal = rows[0], rows[1], rows[2], rows[3], rows[4]
     s_mass_tangent, s_mu = rows[5], rows[6]
-    solution = np.zeros((6, p_count))             # SOLUTION_*: impulses, the pass's targets and scales, work
+    solution = block[8 * p_count:14 * p_count].reshape((6, p_count))  # SOLUTION_*: impulses, targets, scales, work
     normal_s, tangent_s, target = solution[SOLUTION_NORMAL], solution[SOLUTION_TANGENT], solution[SOLUTION_TARGET]
     mass_scale, impulse_scale = solution[SOLUTION_MASS_SCALE], solution[SOLUTION_IMPULSE_SCALE]
-    row_extra = np.zeros((5, p_count))
+    row_extra = block[14 * p_count:].reshape((5, p_count))
     bias_rate, mass_scale_soft, impulse_scale_soft = row_extra[0], row_extra[1], row_extra[2]
     max_normal, separation = row_extra[3], row_extra[4]
     for r in range(p_count):
@@ -707,7 +789,7 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
     static_count = 0
     for i in range(n):
         static_count += 1 if in_contact[i] and not dynamic[i] else 0
-    static_members = np.empty(static_count, dtype=np.int64)
+    static_members, ii = _take(work_ints, ii, static_count)
     static_count = 0
     for i in range(n):
         if in_contact[i] and not dynamic[i]:
@@ -715,9 +797,13 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
             static_count += 1
 
     # 4. The sub-steps.
-    separation[:] = sep              # manifold order; the start's for the first biased pass
+    for k in range(p_count):         # manifold order; the start's for the first biased pass
+        separation[k] = sep[k]
     separation_is_current = True     # (later: the relax pass's, or computed again without relax)
-    joint_work = _joint_rows(joint_a.shape[0])
+    joint_count = joint_a.shape[0]
+    joint_block, ii = _take(work_ints, ii, 6 * joint_count)
+    joint_values, fi = _take(work_floats, fi, 25 * joint_count)
+    joint_work = _joint_rows(joint_block.reshape((6, joint_count)), joint_values.reshape((25, joint_count)))
     joint_rows = -1     # joint rows made at the current poses (-1: none yet)
     for _ in range(substeps):
         for i in range(n):
@@ -811,12 +897,14 @@ class CompiledSoftStep:
 
     Holds the bodies' constant array (half-extents or radius, inverse masses and
     inertias, friction, restitution; columns ``BODY_*``), the joints as arrays with
-    their last impulses, and two buffers of contact points (columns ``POINT_*``): the
-    last step's, which are also the next step's warm start, and the next step's.
+    their last impulses, two buffers of contact points (columns ``POINT_*``): the
+    last step's, which are also the next step's warm start, and the next step's, and
+    the step's work space.  All are made for up to ``capacity`` candidate pairs.
     """
 
-    #: Contact points the buffers hold at first; they grow to twice what a step needs.
-    INITIAL_POINT_CAPACITY = 16
+    #: Candidate pairs the buffers are made for at first; a step that finds more makes
+    #: them again for twice as many.
+    INITIAL_PAIR_CAPACITY = 8
 
     def __init__(self, bodies, joints=()):
         self.circles = bool(bodies) and isinstance(bodies[0].shape, Circle)
@@ -850,9 +938,10 @@ class CompiledSoftStep:
 
     def reset(self) -> None:
         """Forget last step's impulses."""
-        capacity = self.INITIAL_POINT_CAPACITY
-        self.memory_ints, self.memory_floats = np.zeros((2, capacity, 4), np.int64), np.zeros((2, capacity, 7))
+        self.capacity = 0
+        self.memory_ints, self.memory_floats = np.zeros((2, 0, 4), np.int64), np.zeros((2, 0, 7))
         self.figures = np.zeros(FIGURE_COUNT, dtype=np.int64)
+        self.make_buffers(self.INITIAL_PAIR_CAPACITY)
         self.joint_impulses = np.zeros(self.joint_ints.shape[1])
         self.previous_h = None
         self._settings_key = None
@@ -872,19 +961,27 @@ class CompiledSoftStep:
             self._settings_key = key
         while True:
             needed = _soft_step(state.position, state.angle, state.velocity, state.dynamic, state.turning,
-                                self.bodies, self.memory_ints, self.memory_floats, self.figures, self.parameters,
-                                self.switches, self.joint_ints, self.joint_floats, self.joint_impulses)
+                                self.bodies, self.memory_ints, self.memory_floats, self.work_ints,
+                                self.work_floats, self.figures, self.parameters, self.switches, self.joint_ints,
+                                self.joint_floats, self.joint_impulses)
             if not needed:
                 break
-            self._grow_memory(2 * needed)        # nothing changed: step again
+            self.make_buffers(2 * needed)        # nothing changed: step again
         self.previous_h = h
 
-    def _grow_memory(self, capacity: int) -> None:
-        """Point buffers of ``capacity`` points, the last step's points kept."""
-        ints, floats = np.zeros((2, capacity, 4), np.int64), np.zeros((2, capacity, 7))
-        held = self.memory_ints.shape[1]
-        ints[:, :held], floats[:, :held] = self.memory_ints, self.memory_floats
+    def make_buffers(self, capacity: int) -> None:
+        """Buffers for ``capacity`` candidate pairs (up to ``2 * capacity`` points), the
+        last step's points kept (they must fit)."""
+        if not 2 * capacity >= self.figures[FIGURE_POINTS]:
+            raise ValueError(f"buffers for {capacity} pairs cannot keep the last step's "
+                             f"{self.figures[FIGURE_POINTS]} points")
+        ints, floats = np.zeros((2, 2 * capacity, 4), np.int64), np.zeros((2, 2 * capacity, 7))
+        held = min(self.memory_ints.shape[1], 2 * capacity)
+        ints[:, :held], floats[:, :held] = self.memory_ints[:, :held], self.memory_floats[:, :held]
         self.memory_ints, self.memory_floats = ints, floats
+        work_ints, work_floats = _work_sizes(self.body_count, self.joint_ints.shape[1], capacity)
+        self.work_ints, self.work_floats = np.zeros(work_ints, np.int64), np.zeros(work_floats)
+        self.capacity = capacity
 
     @property
     def point_ints(self) -> np.ndarray:

@@ -284,3 +284,21 @@ def test_the_compiled_step_stays_within_its_buffers_when_it_fills_them(tmp_path)
     result = subprocess.run([sys.executable, "-c", EXACT_CAPACITY_RUN], env=env, capture_output=True, text=True,
                             timeout=600, cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     assert result.returncode == 0 and result.stdout.strip() == "ok", result.stderr[-3000:]
+
+
+def test_the_compiled_step_holds_no_reference_to_its_arrays_after_a_step():
+    """The step runs mostly without numba's reference counts: a count taken and not given
+    back would keep the world's arrays alive forever (and grow by one a step)."""
+    import sys
+
+    scene = get_scene("pyramid_10")
+    world = scene.build_world(replace(scene.recommended_settings(), backend="numba"))
+    world.step(scene.dt)
+    step, state = world.compiled_soft_step, world.state
+    arrays = [state.position, state.velocity, step.work_ints, step.work_floats, step.memory_ints, step.bodies,
+              step.parameters, step.figures]
+    before = [sys.getrefcount(array) for array in arrays]
+    for _ in range(20):
+        world.step(scene.dt)
+    assert step.work_floats is arrays[3], "the buffers grew: the counts would not compare"
+    assert [sys.getrefcount(array) for array in arrays] == before

@@ -83,7 +83,7 @@ def forget_stale_machine_code(module_globals: dict) -> bool:
     """Empty the cache index of every cached compiled function defined in the module of
     ``module_globals`` (pass ``globals()``) if its sources changed since the last call;
     returns whether it did.  The digest is kept in ``<module>.sources`` in numba's cache
-    directory for the module; where that cannot be written, numba caches nothing either."""
+    directory for the module (numba only caches where it can write)."""
     name, file = module_globals["__name__"], module_globals["__file__"]
     caches = [value._cache for value in module_globals.values()
               if isinstance(value, Dispatcher) and value.py_func.__module__ == name
@@ -97,11 +97,12 @@ def forget_stale_machine_code(module_globals: dict) -> bool:
             return False
     except OSError:
         pass
-    for cache in caches:
-        cache.flush()
     try:
+        for cache in caches:
+            cache.flush()
         stamp.parent.mkdir(parents=True, exist_ok=True)
         stamp.write_text(digest, encoding="ascii")
-    except OSError:
-        pass
+    except OSError:         # a cache that cannot be emptied is not read either
+        for cache in caches:
+            cache.disable()
     return True

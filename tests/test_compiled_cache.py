@@ -91,3 +91,23 @@ def test_a_module_without_cached_functions_has_nothing_to_forget():
     module = {"__name__": __name__, "__file__": __file__, "twice": njit(cache=False)(twice)}
     assert forget_stale_machine_code(module) is False
     assert forget_stale_machine_code({"__name__": __name__, "__file__": __file__}) is False
+
+
+def test_a_cache_that_cannot_be_emptied_is_not_read(tmp_path, monkeypatch):
+    import importlib
+
+    from solutions.compiled_cache import forget_stale_machine_code
+
+    write_package(tmp_path, 1.0)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    module = importlib.import_module("twinpkg.guarded")
+    cache = module.scaled._cache
+    assert cache._enabled and forget_stale_machine_code(vars(module)) is False     # stamp written at import
+
+    def refuse():
+        raise PermissionError("read-only cache")
+
+    monkeypatch.setattr(cache, "flush", refuse)
+    (tmp_path / "twinpkg" / "constants.py").write_text("SCALE = 3.0\n")
+    assert forget_stale_machine_code(vars(module)) is True
+    assert not cache._enabled

@@ -111,8 +111,8 @@ NO_PAIR = np.iinfo(np.int64).max
 #: one's, h (s), gravity (m/s^2), the largest push (m/s), the restitution threshold
 #: (m/s), the warm start's match distance (m), the speculative margin (m), then the
 #: (bias rate, mass scale, impulse scale) of the soft contacts, of the contacts with a
-#: static body and of the joints.  Few arguments: calling a compiled function costs
-#: about 45 ns per argument, which was a quarter of a small world's step.
+#: static body and of the joints.  (One section of ``floats``: see
+#: :data:`HEADER_COUNT`.)
 (PARAMETER_DT_RATIO, PARAMETER_H, PARAMETER_GRAVITY_X, PARAMETER_GRAVITY_Y, PARAMETER_MAX_PUSH,
  PARAMETER_RESTITUTION_THRESHOLD, PARAMETER_MATCH_DISTANCE, PARAMETER_MARGIN) = range(8)
 PARAMETER_SOFT, PARAMETER_STIFF, PARAMETER_JOINT_SOFTNESS = 8, 11, 14
@@ -124,6 +124,38 @@ PARAMETER_COUNT = 17
 (SWITCH_SUBSTEPS, SWITCH_ITERATIONS, SWITCH_RELAX, SWITCH_FRICTION, SWITCH_WARM_START, SWITCH_BLOCK_SOLVER,
  SWITCH_COLOURS, SWITCH_CORNER_ROUNDING, SWITCH_INCIDENT_ROUNDING, SWITCH_CIRCLES, SWITCH_ROTATION) = range(11)
 SWITCH_COUNT = 11
+#: The step takes two arrays besides the bodies' state (each array argument costs a
+#: call about 50 ns): ``ints`` and ``floats``, each a row of sections (:func:`_layout`).
+#: ``ints`` starts with a header: the number of joints, and the number of candidate
+#: pairs the buffers are made for.
+HEADER_JOINTS, HEADER_CAPACITY = range(2)
+HEADER_COUNT = 2
+
+
+@njit(cache=True)
+def _layout(bodies, joints, capacity):
+    """Where each section of the step's ``ints`` and ``floats`` starts, and their sizes,
+    for ``bodies`` bodies, ``joints`` joints and buffers for ``capacity`` candidate pairs:
+
+    - ``ints``: the header, ``switches`` (``SWITCH_*``), ``figures`` (``FIGURE_*``), the
+      joints' integers (3, joints), the two point buffers (2, 2 * capacity, 4), the work space;
+    - ``floats``: ``parameters`` (``PARAMETER_*``), the bodies' constants (bodies, 6), the
+      joints' (joints, 7), their impulses (joints), the two point buffers
+      (2, 2 * capacity, 7), the work space.
+    """
+    work_ints, work_floats = _work_sizes(bodies, joints, capacity)
+    switches = HEADER_COUNT
+    figures = switches + SWITCH_COUNT
+    joint_ints = figures + FIGURE_COUNT
+    memory_ints = joint_ints + 3 * joints
+    work = memory_ints + 2 * 2 * capacity * 4
+    body_floats = PARAMETER_COUNT
+    joint_floats = body_floats + 6 * bodies
+    impulses = joint_floats + 7 * joints
+    memory_floats = impulses + joints
+    work_space = memory_floats + 2 * 2 * capacity * 7
+    return (switches, figures, joint_ints, memory_ints, work, work + work_ints,
+            body_floats, joint_floats, impulses, memory_floats, work_space, work_space + work_floats)
 
 
 @njit(cache=True)
@@ -545,28 +577,48 @@ def _zero_static_velocities(velocity, static_members):
 
 
 @njit(cache=True)
-def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints, memory_floats, work_ints,
-               work_floats, figures, parameters, switches, joint_ints, joint_floats, joint_impulses):
-    """One soft step of the world (module docstring): ``parameters`` and ``switches``
-    (``PARAMETER_*``, ``SWITCH_*``), the bodies' and joints' constants (``BODY_*``,
-    ``JOINT_*``).  The contact points (``POINT_*``) live in two buffers,
-    ``memory_*[0]`` and ``memory_*[1]``, of ``2 * capacity`` points each: the step reads
-    the last step's from the one ``figures`` names and writes its own into the other,
-    then updates ``figures`` (``FIGURE_*``).  Every other array of the step is a view of
-    ``work_ints`` and ``work_floats`` (:func:`_work_sizes` for ``capacity`` pairs).
+def _soft_step(position, angle, velocity, dynamic, turning, ints, floats):
+    """One soft step of the world (module docstring) on its state (``position`` to
+    ``turning``) with the sections of ``ints`` and ``floats`` (:func:`_layout`):
+    ``parameters`` and ``switches`` (``PARAMETER_*``, ``SWITCH_*``), the bodies' and
+    joints' constants (``BODY_*``, ``JOINT_*``), the joints' impulses.  The contact
+    points (``POINT_*``) live in two buffers, ``memory_*[0]`` and ``memory_*[1]``, of
+    ``2 * capacity`` points each: the step reads the last step's from the one ``figures``
+    names and writes its own into the other, then updates ``figures`` (``FIGURE_*``).
+    Every other array of the step is a view of the work spaces (:func:`_work_sizes`).
     Returns 0, or, having changed nothing, the number of candidate pairs the buffers
     must be made for (more than ``capacity``)."""
     # 1. Candidate pairs (from each box's corners, made once: the pairs' manifolds use them too).
-    n = angle.shape[0]
-    faces = work_floats[:16 * n].reshape((n, 2, 4, 2))
-    if switches[SWITCH_CIRCLES] == 0:
-        _faces_of_boxes(position, bodies[:, 0:2], angle, switches[SWITCH_CORNER_ROUNDING], faces)
-    keys, key_i, key_j = _candidate_pairs(position, bodies[:, 0:2], faces, dynamic, parameters[PARAMETER_MARGIN],
-                                          switches[SWITCH_CIRCLES] != 0, joint_ints[JOINT_PAIRS],
-                                          work_floats[16 * n:20 * n].reshape((n, 4)))
-    return _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turning, bodies, memory_ints,
-                          memory_floats, work_ints, work_floats, figures, parameters, switches, joint_ints,
-                          joint_floats, joint_impulses)
+    # Only the sections they need are taken here: each view costs this function reference counts.
+    n, joints, capacity = angle.shape[0], ints[HEADER_JOINTS], ints[HEADER_CAPACITY]
+    layout = _layout(n, joints, capacity)
+    switches_at, joint_ints_at, bodies_at, work_floats_at = layout[0], layout[2], layout[6], layout[10]
+    circles, corner_rounding = ints[switches_at + SWITCH_CIRCLES] != 0, ints[switches_at + SWITCH_CORNER_ROUNDING]
+    half = floats[bodies_at:bodies_at + 6 * n].reshape((n, 6))[:, 0:2]
+    faces = floats[work_floats_at:work_floats_at + 16 * n].reshape((n, 2, 4, 2))
+    if not circles:
+        _faces_of_boxes(position, half, angle, corner_rounding, faces)
+    jointed = ints[joint_ints_at + 2 * joints:joint_ints_at + 3 * joints]          # row JOINT_PAIRS
+    aabb = floats[work_floats_at + 16 * n:work_floats_at + 20 * n].reshape((n, 4))
+    keys, key_i, key_j = _candidate_pairs(position, half, faces, dynamic, floats[PARAMETER_MARGIN], circles,
+                                          jointed, aabb)
+    return _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turning, ints, floats)
+
+
+@njit(cache=True, inline="always")
+def _sections(n, ints, floats):
+    """The sections of ``ints`` and ``floats`` (:func:`_layout`) as arrays: switches,
+    figures, joint integers, point buffers, work space; parameters, bodies' constants,
+    joint floats, joint impulses, point buffers, work space."""
+    joints, capacity = ints[HEADER_JOINTS], ints[HEADER_CAPACITY]
+    (switches_at, figures_at, joint_ints_at, memory_ints_at, work_ints_at, ints_end, bodies_at, joint_floats_at,
+     impulses_at, memory_floats_at, work_floats_at, floats_end) = _layout(n, joints, capacity)
+    return (ints[switches_at:figures_at], ints[figures_at:joint_ints_at],
+            ints[joint_ints_at:memory_ints_at].reshape((3, joints)),
+            ints[memory_ints_at:work_ints_at].reshape((2, 2 * capacity, 4)), ints[work_ints_at:ints_end],
+            floats[:bodies_at], floats[bodies_at:joint_floats_at].reshape((n, 6)),
+            floats[joint_floats_at:impulses_at].reshape((joints, 7)), floats[impulses_at:memory_floats_at],
+            floats[memory_floats_at:work_floats_at].reshape((2, 2 * capacity, 7)), floats[work_floats_at:floats_end])
 
 
 #: Compiled without numba's reference counts (``_nrt=False``): each array view a
@@ -577,11 +629,11 @@ def _soft_step(position, angle, velocity, dynamic, turning, bodies, memory_ints,
 #: of one, and the caller holds the arguments for the whole call.  Its arguments are
 #: distinct arrays, which LLVM is told (:class:`~solutions.no_alias_compiler.NoAliasCompiler`).
 @njit(cache=True, _nrt=False, pipeline_class=NoAliasCompiler)
-def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turning, bodies, memory_ints,
-                   memory_floats, work_ints, work_floats, figures, parameters, switches, joint_ints, joint_floats,
-                   joint_impulses):
+def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turning, ints, floats):
     """The rest of :func:`_soft_step` from the candidate pairs ``keys`` (``i * n + j``),
     ``key_i`` and ``key_j``: manifolds, prestep, sub-steps, restitution, memory."""
+    (switches, figures, joint_ints, memory_ints, work_ints, parameters, bodies, joint_floats, joint_impulses,
+     memory_floats, work_floats) = _sections(angle.shape[0], ints, floats)
     dt_ratio, h = parameters[PARAMETER_DT_RATIO], parameters[PARAMETER_H]
     gravity_x, gravity_y = parameters[PARAMETER_GRAVITY_X], parameters[PARAMETER_GRAVITY_Y]
     max_push, restitution_threshold = parameters[PARAMETER_MAX_PUSH], parameters[PARAMETER_RESTITUTION_THRESHOLD]
@@ -880,12 +932,14 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turni
         if solved_as_block[q] != 0:
             block_count += 1
     # The points, for the caller and as the next step's warm-start memory.
-    ints, floats = memory_ints[1 - last], memory_floats[1 - last]
+    kept_ints, kept_floats = memory_ints[1 - last], memory_floats[1 - last]
     for k in range(p_count):
-        ints[k, POINT_PAIR], ints[k, POINT_FEATURE], ints[k, POINT_A], ints[k, POINT_B] = pair_key[k], feature[k], a[k], b[k]
-        floats[k, POINT_X], floats[k, POINT_Y], floats[k, POINT_NX], floats[k, POINT_NY] = px[k], py[k], nx[k], ny[k]
-        floats[k, POINT_SEPARATION] = sep[k]
-        floats[k, POINT_NORMAL_IMPULSE], floats[k, POINT_TANGENT_IMPULSE] = normal_total[k], tangent_total[k]
+        kept_ints[k, POINT_PAIR], kept_ints[k, POINT_FEATURE] = pair_key[k], feature[k]
+        kept_ints[k, POINT_A], kept_ints[k, POINT_B] = a[k], b[k]
+        kept_floats[k, POINT_X], kept_floats[k, POINT_Y] = px[k], py[k]
+        kept_floats[k, POINT_NX], kept_floats[k, POINT_NY] = nx[k], ny[k]
+        kept_floats[k, POINT_SEPARATION] = sep[k]
+        kept_floats[k, POINT_NORMAL_IMPULSE], kept_floats[k, POINT_TANGENT_IMPULSE] = normal_total[k], tangent_total[k]
     figures[FIGURE_MEMORY], figures[FIGURE_POINTS] = 1 - last, p_count
     figures[FIGURE_CANDIDATE_PAIRS], figures[FIGURE_MANIFOLDS] = m, g_count
     figures[FIGURE_WARM_STARTED], figures[FIGURE_BLOCK_MANIFOLDS] = warm_started, block_count
@@ -895,11 +949,14 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turni
 class CompiledSoftStep:
     """The soft step of :meth:`World.step` compiled whole, for a world of boxes or of discs (module docstring).
 
-    Holds the bodies' constant array (half-extents or radius, inverse masses and
-    inertias, friction, restitution; columns ``BODY_*``), the joints as arrays with
-    their last impulses, two buffers of contact points (columns ``POINT_*``): the
-    last step's, which are also the next step's warm start, and the next step's, and
-    the step's work space.  All are made for up to ``capacity`` candidate pairs.
+    Holds two arrays, ``ints`` and ``floats``, whose sections (:func:`_layout`) are also
+    its attributes: the settings (``parameters``, ``switches``), the step's ``figures``,
+    the bodies' constants (``bodies``: half-extents or radius, inverse masses and
+    inertias, friction, restitution; columns ``BODY_*``), the joints (``joint_ints``,
+    ``joint_floats``) with their last impulses, two buffers of contact points
+    (``memory_ints``, ``memory_floats``; columns ``POINT_*``): the last step's, which are
+    also the next step's warm start, and the next step's; and the step's work space.
+    The buffers are made for up to ``capacity`` candidate pairs.
     """
 
     #: Candidate pairs the buffers are made for at first; a step that finds more makes
@@ -909,17 +966,18 @@ class CompiledSoftStep:
     def __init__(self, bodies, joints=()):
         self.circles = bool(bodies) and isinstance(bodies[0].shape, Circle)
         size = [[body.shape.radius, 0.0] if self.circles else list(body.shape.half_extents) for body in bodies]
-        self.bodies = np.array([[*half, body.inverse_mass, body.inverse_inertia, body.friction, body.restitution]
-                                for half, body in zip(size, bodies)], dtype=float).reshape(-1, 6)
+        constants = np.array([[*half, body.inverse_mass, body.inverse_inertia, body.friction, body.restitution]
+                              for half, body in zip(size, bodies)], dtype=float).reshape(-1, 6)
         self.body_count = n = len(bodies)
+        self.joint_count = len(joints)
         joined = np.unique(np.array([min(j.a, j.b) * n + max(j.a, j.b) for j in joints], dtype=np.int64))
-        self.joint_ints = np.full((3, len(joints)), NO_PAIR, dtype=np.int64)
-        self.joint_ints[JOINT_A] = [joint.a for joint in joints]
-        self.joint_ints[JOINT_B] = [joint.b for joint in joints]
-        self.joint_ints[JOINT_PAIRS, :len(joined)] = joined
-        self.joint_floats = np.array([[*joint.anchor_a, *joint.anchor_b, joint.length, joint.frequency,
-                                       joint.damping_ratio] for joint in joints], dtype=float).reshape(-1, 7)
-        self.parameters, self.switches = np.zeros(PARAMETER_COUNT), np.zeros(SWITCH_COUNT, dtype=np.int64)
+        joint_ints = np.full((3, len(joints)), NO_PAIR, dtype=np.int64)
+        joint_ints[JOINT_A] = [joint.a for joint in joints]
+        joint_ints[JOINT_B] = [joint.b for joint in joints]
+        joint_ints[JOINT_PAIRS, :len(joined)] = joined
+        joint_floats = np.array([[*joint.anchor_a, *joint.anchor_b, joint.length, joint.frequency,
+                                  joint.damping_ratio] for joint in joints], dtype=float).reshape(-1, 7)
+        self._constants = constants, joint_ints, joint_floats
         self.reset()
 
     @staticmethod
@@ -938,11 +996,9 @@ class CompiledSoftStep:
 
     def reset(self) -> None:
         """Forget last step's impulses."""
-        self.capacity = 0
-        self.memory_ints, self.memory_floats = np.zeros((2, 0, 4), np.int64), np.zeros((2, 0, 7))
-        self.figures = np.zeros(FIGURE_COUNT, dtype=np.int64)
+        self.ints = self.floats = None
         self.make_buffers(self.INITIAL_PAIR_CAPACITY)
-        self.joint_impulses = np.zeros(self.joint_ints.shape[1])
+        self.bodies[:], self.joint_ints[:], self.joint_floats[:] = self._constants
         self.previous_h = None
         self._settings_key = None
 
@@ -961,27 +1017,46 @@ class CompiledSoftStep:
             self._settings_key = key
         while True:
             needed = _soft_step(state.position, state.angle, state.velocity, state.dynamic, state.turning,
-                                self.bodies, self.memory_ints, self.memory_floats, self.work_ints,
-                                self.work_floats, self.figures, self.parameters, self.switches, self.joint_ints,
-                                self.joint_floats, self.joint_impulses)
+                                self.ints, self.floats)
             if not needed:
                 break
             self.make_buffers(2 * needed)        # nothing changed: step again
         self.previous_h = h
 
     def make_buffers(self, capacity: int) -> None:
-        """Buffers for ``capacity`` candidate pairs (up to ``2 * capacity`` points), the
-        last step's points kept (they must fit)."""
-        if not 2 * capacity >= self.figures[FIGURE_POINTS]:
+        """``ints`` and ``floats`` (:func:`_layout`) for ``capacity`` candidate pairs (up to
+        ``2 * capacity`` points), everything but the work space kept: the settings, the
+        figures, the constants, the joints' impulses and the last step's points (which
+        must fit); and each section as an attribute (a view)."""
+        held = self.ints is not None
+        if held and not 2 * capacity >= self.figures[FIGURE_POINTS]:
             raise ValueError(f"buffers for {capacity} pairs cannot keep the last step's "
                              f"{self.figures[FIGURE_POINTS]} points")
-        ints, floats = np.zeros((2, 2 * capacity, 4), np.int64), np.zeros((2, 2 * capacity, 7))
-        held = min(self.memory_ints.shape[1], 2 * capacity)
-        ints[:, :held], floats[:, :held] = self.memory_ints[:, :held], self.memory_floats[:, :held]
-        self.memory_ints, self.memory_floats = ints, floats
-        work_ints, work_floats = _work_sizes(self.body_count, self.joint_ints.shape[1], capacity)
-        self.work_ints, self.work_floats = np.zeros(work_ints, np.int64), np.zeros(work_floats)
-        self.capacity = capacity
+        n, joints = self.body_count, self.joint_count
+        layout = _layout(n, joints, capacity)
+        ints, floats = np.zeros(layout[5], np.int64), np.zeros(layout[11])
+        ints[HEADER_JOINTS], ints[HEADER_CAPACITY] = joints, capacity
+        if held:
+            points = min(self.memory_ints.shape[1], 2 * capacity)
+            old_ints, old_floats, old_points = self.ints, self.floats, (self.memory_ints, self.memory_floats)
+            old_layout = _layout(n, joints, self.capacity)
+            ints[HEADER_COUNT:layout[3]] = old_ints[HEADER_COUNT:old_layout[3]]        # up to the point buffers
+            floats[:layout[9]] = old_floats[:old_layout[9]]
+        (switches, figures, joint_ints, memory_ints, work_ints, ints_end, bodies, joint_floats, impulses,
+         memory_floats, work_floats, floats_end) = layout
+        self.ints, self.floats, self.capacity = ints, floats, capacity
+        self.switches, self.figures = ints[switches:figures], ints[figures:joint_ints]
+        self.joint_ints = ints[joint_ints:memory_ints].reshape(3, joints)
+        self.memory_ints = ints[memory_ints:work_ints].reshape(2, 2 * capacity, 4)
+        self.work_ints = ints[work_ints:ints_end]
+        self.parameters, self.bodies = floats[:bodies], floats[bodies:joint_floats].reshape(n, 6)
+        self.joint_floats = floats[joint_floats:impulses].reshape(joints, 7)
+        self.joint_impulses = floats[impulses:memory_floats]
+        self.memory_floats = floats[memory_floats:work_floats].reshape(2, 2 * capacity, 7)
+        self.work_floats = floats[work_floats:floats_end]
+        if held:
+            self.memory_ints[:, :points], self.memory_floats[:, :points] = (old_points[0][:, :points],
+                                                                            old_points[1][:, :points])
 
     @property
     def point_ints(self) -> np.ndarray:

@@ -399,28 +399,36 @@ def _sorted_pairs(first, second, n):
     m = len(first)
     if m > MAX_BODIES:
         raise MemoryError("more than 2**31 - 1 pairs (an output of over 32 GB)")
-    by_second = np.empty(m, dtype=np.int32)           # positions of the pairs, by second
-    start = np.zeros(n + 1, dtype=np.int64)
+    pairs = np.empty((m, 2), dtype=np.int64)
+    _counting_sort_pairs(first, second, m, np.empty(m, dtype=np.int32), np.empty(n + 1, dtype=np.int64),
+                         pairs[:, 0], pairs[:, 1])
+    return pairs
+
+
+@njit(cache=True)
+def _counting_sort_pairs(first, second, m, by_second, start, sorted_first, sorted_second):
+    """The first ``m`` pairs ``(first, second)`` of bodies ``0 .. n - 1`` sorted by
+    (first, second) into ``sorted_first`` and ``sorted_second``: a stable counting sort by
+    ``second``, then one by ``first``.  ``by_second`` (m) and ``start`` (n + 1) are work space."""
+    n = start.shape[0] - 1
+    start[:] = 0
     for p in range(m):
         start[second[p] + 1] += 1
     for i in range(n):
         start[i + 1] += start[i]
-    for p in range(m):
+    for p in range(m):                                  # positions of the pairs, by second
         by_second[start[second[p]]] = p
         start[second[p]] += 1
-    for i in range(n + 1):
-        start[i] = 0
+    start[:] = 0
     for p in range(m):
         start[first[p] + 1] += 1
     for i in range(n):
         start[i + 1] += start[i]
-    pairs = np.empty((m, 2), dtype=np.int64)
     for q in range(m):
         p = by_second[q]
         row = start[first[p]]
         start[first[p]] += 1
-        pairs[row, 0], pairs[row, 1] = first[p], second[p]
-    return pairs
+        sorted_first[row], sorted_second[row] = first[p], second[p]
 
 
 # Cached machine code compiled from older sources is forgotten (solutions.compiled_cache).

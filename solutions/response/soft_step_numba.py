@@ -55,7 +55,8 @@ import numpy as np
 from numba import njit
 
 from ..contact import Contact
-from ..broadphase.grid_numba import (DENSE_STRIPS_PER_ENTRY, _check_and_measure, _grid_pairs, _grown, _strips)
+from ..broadphase.grid_numba import (DENSE_STRIPS_PER_ENTRY, _check_and_measure, _counting_sort_pairs, _grid_pairs,
+                                      _grown, _strips)
 from ..broadphase.grid_numba import _sorted_pairs as _sorted_grid_pairs
 from ..broadphase.sorted_grid_numpy import DEFAULT_MAX_STRIPS_PER_BODY, MAX_STRIP_INDEX
 from ..narrowphase.box_pairs_numba import (CLIPPING_FLOATS, CLIPPING_INTS, MANIFOLD_COUNT, MANIFOLD_FLOATS,
@@ -164,12 +165,13 @@ def _work_sizes(bodies, joints, pairs):
     ``bodies`` bodies, ``joints`` joints and up to ``pairs`` candidate pairs (up to
     ``pairs`` manifolds and ``2 * pairs`` points; the last step's points are up to
     ``2 * pairs`` too).  Each block is counted where :func:`_soft_step` takes it."""
-    ints = (2 * pairs + MANIFOLD_INTS * pairs + CLIPPING_INTS    # features, manifolds, clipping
+    ints = (2 * bodies + 6 * pairs + 1                           # a few bodies' candidate pairs
+            + 2 * pairs + MANIFOLD_INTS * pairs + CLIPPING_INTS  # features, manifolds, clipping
             + 5 * pairs + 6 * 2 * pairs + 2 * bodies             # groups and points in pair order, body flags
             + 3 * pairs + bodies + 2                             # the sweep order
             + 5 * pairs + bodies + 6 * joints                    # the kernel's groups, static bodies, joints
             + 2 * pairs + 2 * pairs)                             # the warm start's matching
-    floats = (26 * bodies + MANIFOLD_FLOATS * pairs + CLIPPING_FLOATS    # faces, AABBs, bodies; manifolds
+    floats = (30 * bodies + MANIFOLD_FLOATS * pairs + CLIPPING_FLOATS    # faces, AABBs, sweep, bodies; manifolds
               + 27 * 2 * pairs + 9 * pairs + (8 + 6 + 5) * 2 * pairs     # points, groups, rows
               + 25 * joints)
     return ints, floats
@@ -181,16 +183,12 @@ def _take(work, at, size):
     return work[at:at + size], at + size
 
 
-@njit(cache=True)
-def _candidate_pairs(position, half, faces, dynamic, margin, circles, jointed, aabb):
-    """Pairs ``i < j`` of bodies whose AABBs widened by ``margin / 2`` overlap or touch,
-    not both static and not joined (``jointed``: sorted keys, padded with ``NO_PAIR``),
-    as sorted keys ``i * n + j`` and their ``i`` and ``j``; boxes of corners
-    ``faces[:, 0]`` (:func:`_faces_of_boxes`), or discs of radius ``half[:, 0]`` if
-    ``circles``.  ``aabb`` (n, 4) is work space."""
-    n = position.shape[0]
+@njit(cache=True, _nrt=False)     # (without reference counts: see _step_on_pairs)
+def _aabbs(position, half, faces, margin, circles, aabb):
+    """Each body's AABB widened by ``margin / 2`` into ``aabb`` (n, 4: min x, min y, max x,
+    max y): boxes of corners ``faces[:, 0]``, or discs of radius ``half[:, 0]``."""
     grow = 0.5 * margin
-    for i in range(n):
+    for i in range(position.shape[0]):
         if circles:
             r = half[i, 0]
             aabb[i, 0], aabb[i, 1] = (position[i, 0] - r) + (-grow), (position[i, 1] - r) + (-grow)
@@ -199,6 +197,61 @@ def _candidate_pairs(position, half, faces, dynamic, margin, circles, jointed, a
         for c in range(2):      # corners 0..3 of faces[i, 0]
             aabb[i, c] = min(faces[i, 0, 0, c], faces[i, 0, 1, c], faces[i, 0, 2, c], faces[i, 0, 3, c]) + (-grow)
             aabb[i, 2 + c] = max(faces[i, 0, 0, c], faces[i, 0, 1, c], faces[i, 0, 2, c], faces[i, 0, 3, c]) + grow
+
+
+@njit(cache=True, _nrt=False)     # (without reference counts: see _step_on_pairs)
+def _few_candidate_pairs(aabb, dynamic, jointed, work, swept, keys, key_i, key_j):
+    """:func:`_candidate_pairs` for fewer than ``STRIP_GRID_MIN_BODIES`` bodies, which it
+    sweeps as :func:`_swept_pairs` does, without allocating: the pairs into ``keys``,
+    ``key_i`` and ``key_j`` (of the same length, the capacity ``C``).  ``work`` holds
+    ``2 * n + 3 * C + 1`` integers and ``swept`` is (n, 4).  Returns the number of pairs,
+    or -1 if the buffers ran short: the sweep wants room for the pairs found so far and
+    every possible partner of the next box (``C >= pairs + n`` is always enough)."""
+    n, capacity = aabb.shape[0], keys.shape[0]
+    rank, first, second = work[:n], work[n:n + capacity], work[n + capacity:n + 2 * capacity]
+    by_second, start = work[n + 2 * capacity:n + 3 * capacity], work[n + 3 * capacity:2 * n + 3 * capacity + 1]
+    axis = _sweep_axis(aabb)
+    _insertion_rank(aabb, axis, rank)
+    _swept_boxes(aabb, rank, axis, swept)
+    found, r = _sweep(swept, rank, first, second, 0, 0)
+    if r < n:
+        return -1
+    if found <= INSERTION_SORT_MAX:
+        _insertion_sort_pairs(first, second, found, key_i, key_j)
+    else:
+        _counting_sort_pairs(first, second, found, by_second, start, key_i, key_j)
+    return _kept_pairs(key_i, key_j, found, dynamic, jointed, keys, key_i, key_j)
+
+
+@njit(cache=True)
+def _kept_pairs(first, second, found, dynamic, jointed, keys, key_i, key_j):
+    """Of the first ``found`` sorted pairs, those not both static and not joined
+    (``jointed``: sorted keys, padded with ``NO_PAIR``) into ``keys`` (``i * n + j``),
+    ``key_i`` and ``key_j`` (which may be ``first`` and ``second``: written at or before
+    each pair read); returns how many."""
+    n = dynamic.shape[0]
+    kept = 0
+    joined = 0          # both the pairs and the joined keys are sorted: walk them together
+    for k in range(found):
+        i, j = first[k], second[k]
+        key = i * n + j
+        keys[kept], key_i[kept], key_j[kept] = key, i, j
+        while joined < jointed.shape[0] and jointed[joined] < key:
+            joined += 1
+        keep = (dynamic[i] or dynamic[j]) and not (joined < jointed.shape[0] and jointed[joined] == key)
+        kept += 1 if keep else 0
+    return kept
+
+
+@njit(cache=True)
+def _candidate_pairs(position, half, faces, dynamic, margin, circles, jointed, aabb):
+    """Pairs ``i < j`` of bodies whose AABBs widened by ``margin / 2`` overlap or touch,
+    not both static and not joined (``jointed``: sorted keys, padded with ``NO_PAIR``),
+    as sorted keys ``i * n + j`` and their ``i`` and ``j``; boxes of corners
+    ``faces[:, 0]`` (:func:`_faces_of_boxes`), or discs of radius ``half[:, 0]`` if
+    ``circles``.  ``aabb`` (n, 4) is work space."""
+    n = position.shape[0]
+    _aabbs(position, half, faces, margin, circles, aabb)
     valid, cell_size, lowest_y, highest_y = _check_and_measure(aabb)
     pairs = np.empty((0, 2), dtype=np.int64)
     swept = True
@@ -215,16 +268,7 @@ def _candidate_pairs(position, half, faces, dynamic, margin, circles, jointed, a
     m = pairs.shape[0]
     kept_pairs = np.empty((3, m), dtype=np.int64)
     keys, key_i, key_j = kept_pairs[0], kept_pairs[1], kept_pairs[2]
-    kept = 0
-    joined = 0          # both the pairs and the joined keys are sorted: walk them together
-    for k in range(m):
-        i, j = pairs[k, 0], pairs[k, 1]
-        key = i * n + j
-        keys[kept], key_i[kept], key_j[kept] = key, i, j
-        while joined < jointed.shape[0] and jointed[joined] < key:
-            joined += 1
-        keep = (dynamic[i] or dynamic[j]) and not (joined < jointed.shape[0] and jointed[joined] == key)
-        kept += 1 if keep else 0
+    kept = _kept_pairs(pairs[:, 0], pairs[:, 1], m, dynamic, jointed, keys, key_i, key_j)
     return keys[:kept], key_i[:kept], key_j[:kept]
 
 
@@ -236,33 +280,14 @@ def _swept_pairs(aabb):
     few bodies or the wide scatters that the strip grid does not take.  A few bodies or
     pairs are sorted by insertion (numba's sorts cost about 0.3 us even for three values)."""
     n = aabb.shape[0]
-    low_x, high_x, low_y, high_y = math.inf, -math.inf, math.inf, -math.inf
-    for i in range(n):
-        low_x, high_x = min(low_x, aabb[i, 0]), max(high_x, aabb[i, 0])
-        low_y, high_y = min(low_y, aabb[i, 1]), max(high_y, aabb[i, 1])
-    axis = 1 if high_y - low_y > high_x - low_x else 0          # swept along this axis,
-    other = 1 - axis                                            # tested along the other
+    axis = _sweep_axis(aabb)
     if n <= INSERTION_SORT_MAX:
-        # Insertion, taking the bodies from the end if they come in descending order
-        # (a chain hanging from its first link): nearly sorted input costs O(n) then.
         rank = np.empty(n, dtype=np.int64)
-        descending = aabb[n - 1, axis] < aabb[0, axis]
-        for t in range(n):
-            r = n - 1 - t if descending else t
-            q = t - 1
-            while q >= 0 and aabb[rank[q], axis] > aabb[r, axis]:
-                rank[q + 1] = rank[q]
-                q -= 1
-            rank[q + 1] = r
+        _insertion_rank(aabb, axis, rank)
     else:
         rank = np.argsort(aabb[:, axis])
-    # The boxes in that order (contiguous): columns min and max along the sweep, then
-    # along the other axis.  No branch on the other axis's test: every pair in the
-    # window is written, and counted if the boxes overlap along that axis too.
     swept = np.empty((n, 4))
-    for r in range(n):
-        swept[r, 0], swept[r, 1] = aabb[rank[r], axis], aabb[rank[r], axis + 2]
-        swept[r, 2], swept[r, 3] = aabb[rank[r], other], aabb[rank[r], other + 2]
+    _swept_boxes(aabb, rank, axis, swept)
     first = np.empty(4 * n + 16, dtype=np.int64)
     second = np.empty(4 * n + 16, dtype=np.int64)
     found, r = _sweep(swept, rank, first, second, 0, 0)
@@ -272,14 +297,58 @@ def _swept_pairs(aabb):
     if found > INSERTION_SORT_MAX:
         return _sorted_grid_pairs(first[:found], second[:found], n)
     pairs = np.empty((found, 2), dtype=np.int64)
+    _insertion_sort_pairs(first, second, found, pairs[:, 0], pairs[:, 1])
+    return pairs
+
+
+@njit(cache=True)
+def _sweep_axis(aabb):
+    """The axis (0: x, 1: y) over which the boxes' minimum corners spread wider: the
+    sweep runs along it and tests the other."""
+    low_x, high_x, low_y, high_y = math.inf, -math.inf, math.inf, -math.inf
+    for i in range(aabb.shape[0]):
+        low_x, high_x = min(low_x, aabb[i, 0]), max(high_x, aabb[i, 0])
+        low_y, high_y = min(low_y, aabb[i, 1]), max(high_y, aabb[i, 1])
+    return 1 if high_y - low_y > high_x - low_x else 0
+
+
+@njit(cache=True)
+def _insertion_rank(aabb, axis, rank):
+    """The boxes in order of their minimum along ``axis`` into ``rank``, by insertion,
+    taking them from the end if they come in descending order (a chain hanging from its
+    first link): nearly sorted input costs O(n) then."""
+    n = aabb.shape[0]
+    descending = n > 0 and aabb[n - 1, axis] < aabb[0, axis]
+    for t in range(n):
+        r = n - 1 - t if descending else t
+        q = t - 1
+        while q >= 0 and aabb[rank[q], axis] > aabb[r, axis]:
+            rank[q + 1] = rank[q]
+            q -= 1
+        rank[q + 1] = r
+
+
+@njit(cache=True)
+def _swept_boxes(aabb, rank, axis, swept):
+    """The boxes in ``rank`` order into ``swept`` (contiguous): columns min and max along
+    ``axis``, then along the other.  (The sweep does not branch on the other axis's test:
+    every pair in the window is written, and counted if the boxes overlap there too.)"""
+    other = 1 - axis
+    for r in range(rank.shape[0]):
+        swept[r, 0], swept[r, 1] = aabb[rank[r], axis], aabb[rank[r], axis + 2]
+        swept[r, 2], swept[r, 3] = aabb[rank[r], other], aabb[rank[r], other + 2]
+
+
+@njit(cache=True)
+def _insertion_sort_pairs(first, second, found, sorted_first, sorted_second):
+    """The first ``found`` pairs sorted by (first, second) into ``sorted_*``, by insertion."""
     for k in range(found):
         i, j = first[k], second[k]
         q = k - 1
-        while q >= 0 and (pairs[q, 0] > i or (pairs[q, 0] == i and pairs[q, 1] > j)):
-            pairs[q + 1, 0], pairs[q + 1, 1] = pairs[q, 0], pairs[q, 1]
+        while q >= 0 and (sorted_first[q] > i or (sorted_first[q] == i and sorted_second[q] > j)):
+            sorted_first[q + 1], sorted_second[q + 1] = sorted_first[q], sorted_second[q]
             q -= 1
-        pairs[q + 1, 0], pairs[q + 1, 1] = i, j
-    return pairs
+        sorted_first[q + 1], sorted_second[q + 1] = i, j
 
 
 @njit(cache=True)
@@ -591,6 +660,9 @@ def _soft_step(position, angle, velocity, dynamic, turning, ints, floats):
     # 1. Candidate pairs (from each box's corners, made once: the pairs' manifolds use them too).
     # Only the sections they need are taken here: each view costs this function reference counts.
     n, joints, capacity = angle.shape[0], ints[HEADER_JOINTS], ints[HEADER_CAPACITY]
+    if n < STRIP_GRID_MIN_BODIES:       # swept in _step_on_pairs, without allocating
+        none = ints[:0]
+        return _step_on_pairs(none, none, none, position, angle, velocity, dynamic, turning, ints, floats)
     layout = _layout(n, joints, capacity)
     switches_at, joint_ints_at, bodies_at, work_floats_at = layout[0], layout[2], layout[6], layout[10]
     circles, corner_rounding = ints[switches_at + SWITCH_CIRCLES] != 0, ints[switches_at + SWITCH_CORNER_ROUNDING]
@@ -631,7 +703,9 @@ def _sections(n, ints, floats):
 @njit(cache=True, _nrt=False, pipeline_class=NoAliasCompiler)
 def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turning, ints, floats):
     """The rest of :func:`_soft_step` from the candidate pairs ``keys`` (``i * n + j``),
-    ``key_i`` and ``key_j``: manifolds, prestep, sub-steps, restitution, memory."""
+    ``key_i`` and ``key_j``: manifolds, prestep, sub-steps, restitution, memory.  For
+    fewer than ``STRIP_GRID_MIN_BODIES`` bodies the pairs come empty and are found here
+    (:func:`_few_candidate_pairs`)."""
     (switches, figures, joint_ints, memory_ints, work_ints, parameters, bodies, joint_floats, joint_impulses,
      memory_floats, work_floats) = _sections(angle.shape[0], ints, floats)
     dt_ratio, h = parameters[PARAMETER_DT_RATIO], parameters[PARAMETER_H]
@@ -657,11 +731,26 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turni
     # 2. Speculative manifolds of every pair.  Work space: blocks taken in turn from
     # work_ints (at ``ii``) and work_floats (at ``fi``), after the faces and AABBs.
     faces = work_floats[:16 * n].reshape((n, 2, 4, 2))
-    fi = 20 * n
+    fi = 24 * n             # after the faces, the AABBs and the sweep's copy of them
+    capacity = memory_ints.shape[1] // 2
+    few_work, ii = _take(work_ints, 0, 2 * n + 3 * capacity + 1)
+    few_keys, ii = _take(work_ints, ii, capacity)
+    few_i, ii = _take(work_ints, ii, capacity)
+    few_j, ii = _take(work_ints, ii, capacity)
+    if n < STRIP_GRID_MIN_BODIES:       # 1. candidate pairs (for more bodies: _soft_step's)
+        if not circles:
+            _faces_of_boxes(position, half, angle, corner_rounding, faces)
+        aabb = work_floats[16 * n:20 * n].reshape((n, 4))
+        _aabbs(position, half, faces, margin, circles, aabb)
+        m = _few_candidate_pairs(aabb, dynamic, jointed, few_work, work_floats[20 * n:24 * n].reshape((n, 4)),
+                                 few_keys, few_i, few_j)
+        if m < 0:
+            return capacity + n
+        keys, key_i, key_j = few_keys[:m], few_i[:m], few_j[:m]
     m = keys.shape[0]
     if 2 * m > memory_ints.shape[1]:
         return m
-    block, ii = _take(work_ints, 0, 2 * m)
+    block, ii = _take(work_ints, ii, 2 * m)
     features = block.reshape((m, 2))
     features[:] = CIRCLE_FEATURE
     block, ii = _take(work_ints, ii, MANIFOLD_INTS * m)

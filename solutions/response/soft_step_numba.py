@@ -32,14 +32,15 @@ their compiled twins.  Tested equal to the readable step to 1e-12 on every box s
 over 1 s, on random piles and on disc chains (``tests/test_soft_step_numba.py``).  Contacts are made into
 :class:`~solutions.contact.Contact` objects only when asked for (``world.manifolds``).
 
-Memory: the step allocates only its candidate pairs.  Everything else lives in arrays the
+Memory: the step allocates only the candidate pairs of 64 bodies or more (the strip
+grid's; a few bodies are swept without allocating).  Everything else lives in arrays the
 :class:`CompiledSoftStep` keeps between steps, made for a number of candidate pairs that
 grows when a step finds more (the step then returns, having changed nothing, and runs
 again): two buffers of contact points, the last step's (its warm start) and this
 step's, and a work space of integers and of floats (:func:`_work_sizes`) from which the
-step takes each of its blocks in turn.  After the candidate pairs, the step runs in a
-function compiled without reference counts (:func:`_step_on_pairs`), where the many
-views it makes of its blocks cost nothing.
+step takes each of its blocks in turn.  After the strip grid's candidate pairs, or from
+the start for a few bodies, the step runs in a function compiled without reference
+counts (:func:`_step_on_pairs`), where the many views it makes of its blocks cost nothing.
 
 Conventions: SI units; normal from body ``i`` to body ``j`` of a pair ``i < j``; a
 feature id ``(ref, face, incident_face, vertex)`` is stored as the integer

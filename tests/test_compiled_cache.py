@@ -7,7 +7,6 @@ a compiled function reading a constant from a sibling module, with and without
 import os
 import subprocess
 import sys
-import textwrap
 from pathlib import Path
 
 from solutions.compiled_cache import source_files

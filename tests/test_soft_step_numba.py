@@ -216,7 +216,7 @@ def test_the_compiled_candidate_pairs_are_the_brute_force_ones(layout):
     from solutions.broadphase.aabb_array import aabb_array
     from solutions.broadphase.brute_force import pairs_brute_force
     from solutions.narrowphase.box_pairs_numba import _faces_of_boxes, matmul_rounding
-    from solutions.response.soft_step_numba import (NO_PAIR, STRIP_GRID_MIN_BODIES, _candidate_pairs,
+    from solutions.response.soft_step_numba import (NO_PAIR, STRIP_GRID_MIN_BODIES, _aabbs, _candidate_pairs,
                                                      _few_candidate_pairs)
 
     rng = np.random.default_rng({"few": 1, "heap": 4, "pile": 2, "tall_scatter": 3}[layout])
@@ -246,7 +246,8 @@ def test_the_compiled_candidate_pairs_are_the_brute_force_ones(layout):
         faces = np.empty((n, 2, 4, 2))
         _faces_of_boxes(position, half, angle, matmul_rounding()[0], faces)
         aabb = np.empty((n, 4))
-        keys, first, second = _candidate_pairs(position, half, faces, dynamic, margin, False, jointed, aabb)
+        _aabbs(position, half, faces, margin, False, aabb)
+        keys, first, second = _candidate_pairs(aabb, dynamic, jointed)
         assert list(zip(first.tolist(), second.tolist())) == want, f"trial {trial}"
         assert keys.tolist() == [i * n + j for i, j in want]
         if n < STRIP_GRID_MIN_BODIES:       # the step's own sweep for a few bodies, into buffers

@@ -165,7 +165,7 @@ def _work_sizes(bodies, joints, pairs):
     """Integers and floats of the step's work space (``work_ints``, ``work_floats``) for
     ``bodies`` bodies, ``joints`` joints and up to ``pairs`` candidate pairs (up to
     ``pairs`` manifolds and ``2 * pairs`` points; the last step's points are up to
-    ``2 * pairs`` too).  Each block is counted where :func:`_soft_step` takes it."""
+    ``2 * pairs`` too).  Each block is counted where :func:`_step_on_pairs` takes it."""
     ints = (2 * bodies + 6 * pairs + 1                           # a few bodies' candidate pairs
             + 2 * pairs + MANIFOLD_INTS * pairs + CLIPPING_INTS  # features, manifolds, clipping
             + 5 * pairs + 6 * 2 * pairs + 2 * bodies             # groups and points in pair order, body flags
@@ -182,6 +182,20 @@ def _work_sizes(bodies, joints, pairs):
 def _take(work, at, size):
     """``size`` values of the work space ``work`` from ``at``, and where the next block starts."""
     return work[at:at + size], at + size
+
+
+@njit(cache=True, inline="always")     # (returns views: inlined, also into _step_on_pairs)
+def _faces_and_aabbs(position, angle, half, margin, circles, corner_rounding, work_floats):
+    """The boxes' corners and normals (:func:`_faces_of_boxes`; not for discs) and every
+    body's widened AABB (:func:`_aabbs`), made at the start of the work space
+    ``work_floats`` (16 n and 4 n values), as views (n, 2, 4, 2) and (n, 4)."""
+    n = position.shape[0]
+    faces = work_floats[:16 * n].reshape((n, 2, 4, 2))
+    aabb = work_floats[16 * n:20 * n].reshape((n, 4))
+    if not circles:
+        _faces_of_boxes(position, half, angle, corner_rounding, faces)
+    _aabbs(position, half, faces, margin, circles, aabb)
+    return faces, aabb
 
 
 @njit(cache=True, _nrt=False)     # (without reference counts: see _step_on_pairs)
@@ -245,14 +259,12 @@ def _kept_pairs(first, second, found, dynamic, jointed, keys, key_i, key_j):
 
 
 @njit(cache=True)
-def _candidate_pairs(position, half, faces, dynamic, margin, circles, jointed, aabb):
-    """Pairs ``i < j`` of bodies whose AABBs widened by ``margin / 2`` overlap or touch,
+def _candidate_pairs(aabb, dynamic, jointed):
+    """Pairs ``i < j`` of bodies whose AABBs ``aabb`` (:func:`_aabbs`) overlap or touch,
     not both static and not joined (``jointed``: sorted keys, padded with ``NO_PAIR``),
-    as sorted keys ``i * n + j`` and their ``i`` and ``j``; boxes of corners
-    ``faces[:, 0]`` (:func:`_faces_of_boxes`), or discs of radius ``half[:, 0]`` if
-    ``circles``.  ``aabb`` (n, 4) is work space."""
-    n = position.shape[0]
-    _aabbs(position, half, faces, margin, circles, aabb)
+    as sorted keys ``i * n + j`` and their ``i`` and ``j``: the strip grid's from
+    ``STRIP_GRID_MIN_BODIES`` bodies on, otherwise (and for wide scatters) swept."""
+    n = aabb.shape[0]
     valid, cell_size, lowest_y, highest_y = _check_and_measure(aabb)
     pairs = np.empty((0, 2), dtype=np.int64)
     swept = True
@@ -658,23 +670,15 @@ def _soft_step(position, angle, velocity, dynamic, turning, ints, floats):
     Every other array of the step is a view of the work spaces (:func:`_work_sizes`).
     Returns 0, or, having changed nothing, the number of candidate pairs the buffers
     must be made for (more than ``capacity``)."""
-    # 1. Candidate pairs (from each box's corners, made once: the pairs' manifolds use them too).
-    # Only the sections they need are taken here: each view costs this function reference counts.
-    n, joints, capacity = angle.shape[0], ints[HEADER_JOINTS], ints[HEADER_CAPACITY]
-    if n < STRIP_GRID_MIN_BODIES:       # swept in _step_on_pairs, without allocating
+    # 1. Candidate pairs: from STRIP_GRID_MIN_BODIES bodies on, the strip grid's, which
+    # allocates, here; fewer bodies are swept in _step_on_pairs, without allocating.
+    if angle.shape[0] < STRIP_GRID_MIN_BODIES:
         none = ints[:0]
         return _step_on_pairs(none, none, none, position, angle, velocity, dynamic, turning, ints, floats)
-    layout = _layout(n, joints, capacity)
-    switches_at, joint_ints_at, bodies_at, work_floats_at = layout[0], layout[2], layout[6], layout[10]
-    circles, corner_rounding = ints[switches_at + SWITCH_CIRCLES] != 0, ints[switches_at + SWITCH_CORNER_ROUNDING]
-    half = floats[bodies_at:bodies_at + 6 * n].reshape((n, 6))[:, 0:2]
-    faces = floats[work_floats_at:work_floats_at + 16 * n].reshape((n, 2, 4, 2))
-    if not circles:
-        _faces_of_boxes(position, half, angle, corner_rounding, faces)
-    jointed = ints[joint_ints_at + 2 * joints:joint_ints_at + 3 * joints]          # row JOINT_PAIRS
-    aabb = floats[work_floats_at + 16 * n:work_floats_at + 20 * n].reshape((n, 4))
-    keys, key_i, key_j = _candidate_pairs(position, half, faces, dynamic, floats[PARAMETER_MARGIN], circles,
-                                          jointed, aabb)
+    switches, _, joint_ints, _, _, parameters, bodies, _, _, _, work_floats = _sections(angle.shape[0], ints, floats)
+    _, aabb = _faces_and_aabbs(position, angle, bodies[:, 0:2], parameters[PARAMETER_MARGIN],
+                               switches[SWITCH_CIRCLES] != 0, switches[SWITCH_CORNER_ROUNDING], work_floats)
+    keys, key_i, key_j = _candidate_pairs(aabb, dynamic, joint_ints[JOINT_PAIRS])
     return _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turning, ints, floats)
 
 
@@ -729,25 +733,24 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turni
     old_key, old_feature = old_ints[:, POINT_PAIR], old_ints[:, POINT_FEATURE]
     old_x, old_y = old_floats[:, POINT_X], old_floats[:, POINT_Y]
     old_normal, old_tangent = old_floats[:, POINT_NORMAL_IMPULSE], old_floats[:, POINT_TANGENT_IMPULSE]
-    # 2. Speculative manifolds of every pair.  Work space: blocks taken in turn from
-    # work_ints (at ``ii``) and work_floats (at ``fi``), after the faces and AABBs.
-    faces = work_floats[:16 * n].reshape((n, 2, 4, 2))
-    fi = 24 * n             # after the faces, the AABBs and the sweep's copy of them
+    # Work space: blocks taken in turn from work_ints (at ``ii``) and work_floats (at
+    # ``fi``), after the faces, the AABBs and the sweep's copy of them.
+    fi = 24 * n
     capacity = memory_ints.shape[1] // 2
     few_work, ii = _take(work_ints, 0, 2 * n + 3 * capacity + 1)
     few_keys, ii = _take(work_ints, ii, capacity)
     few_i, ii = _take(work_ints, ii, capacity)
     few_j, ii = _take(work_ints, ii, capacity)
     if n < STRIP_GRID_MIN_BODIES:       # 1. candidate pairs (for more bodies: _soft_step's)
-        if not circles:
-            _faces_of_boxes(position, half, angle, corner_rounding, faces)
-        aabb = work_floats[16 * n:20 * n].reshape((n, 4))
-        _aabbs(position, half, faces, margin, circles, aabb)
+        faces, aabb = _faces_and_aabbs(position, angle, half, margin, circles, corner_rounding, work_floats)
         m = _few_candidate_pairs(aabb, dynamic, jointed, few_work, work_floats[20 * n:24 * n].reshape((n, 4)),
                                  few_keys, few_i, few_j)
         if m < 0:
             return capacity + n
         keys, key_i, key_j = few_keys[:m], few_i[:m], few_j[:m]
+    else:
+        faces = work_floats[:16 * n].reshape((n, 2, 4, 2))
+    # 2. Speculative manifolds of every pair.
     m = keys.shape[0]
     if 2 * m > memory_ints.shape[1]:
         return m

@@ -12,7 +12,26 @@ PYTHON="${PYTHON:-python3}"
 KERNEL=collision-course
 KERNEL_DISPLAY_NAME="Python (collision-course)"
 
+# A .venv whose Python no longer runs (a system Python upgraded or removed under it: its
+# bin/python is a dangling link) is made again; a .venv that is not a virtual environment
+# is left alone.
+stale_venv() {
+    [ -e "$VENV" ] || [ -L "$VENV" ] || return 0
+    "$PY" -c '' >/dev/null 2>&1 && return 0
+    if [ ! -f "$VENV/pyvenv.cfg" ]; then
+        echo "run.sh: $VENV is here but is not a virtual environment (no $VENV/pyvenv.cfg);" >&2
+        echo "        move it away (mv $VENV $VENV.old) and run the command again" >&2
+        exit 2
+    fi
+    local was
+    was="$(readlink "$PY" 2>/dev/null || true)"
+    echo "run.sh: the Python of $VENV no longer runs${was:+ ($PY -> $was is gone)}," \
+        "probably after a system Python upgrade: making $VENV again"
+    rm -rf "$VENV"
+}
+
 setup() {
+    stale_venv
     if [ ! -x "$PY" ]; then
         if ! command -v "$PYTHON" >/dev/null 2>&1; then
             echo "run.sh: $PYTHON not found: install Python 3.11 or newer (or set PYTHON=...)" >&2
@@ -34,9 +53,15 @@ setup() {
     stamp="$VENV/.installed-$("$PY" -c 'import hashlib; print(hashlib.sha1(open("pyproject.toml", "rb").read()).hexdigest()[:12])')"
     if [ ! -f "$stamp" ]; then
         echo "installing the course's packages into $VENV (a few minutes the first time) ..."
-        "$PY" -m pip install --quiet --disable-pip-version-check --upgrade pip
-        "$PY" -m pip install --quiet --disable-pip-version-check -e .
-        "$PY" -m ipykernel install --sys-prefix --name "$KERNEL" --display-name "$KERNEL_DISPLAY_NAME" >/dev/null
+        # pip's and setuptools' chatter goes to a log, shown only when the install fails.
+        if ! { "$PY" -m pip install --quiet --disable-pip-version-check --upgrade pip &&
+               "$PY" -m pip install --quiet --disable-pip-version-check -e . &&
+               "$PY" -m ipykernel install --sys-prefix --name "$KERNEL" --display-name "$KERNEL_DISPLAY_NAME"
+             } >"$VENV/pip.log" 2>&1; then
+            cat "$VENV/pip.log" >&2
+            echo "run.sh: installing the course's packages failed (log above, also in $VENV/pip.log)" >&2
+            exit 1
+        fi
         # JupyterLab: open Markdown pages (book/intro.md ...) rendered, not as source.
         mkdir -p "$VENV/share/jupyter/lab/settings"
         printf '%s\n' '{"@jupyterlab/docmanager-extension:plugin": {"defaultViewers": {"markdown": "Markdown Preview"}}}' \
@@ -57,6 +82,11 @@ case "$command" in
         ;;
     lab)
         setup
+        if [ "$(id -u)" = 0 ]; then
+            # Jupyter refuses to start as root unless asked; root is usual in Docker and some WSL set-ups.
+            echo "run.sh: running as root: starting JupyterLab with --allow-root"
+            set -- --allow-root "$@"
+        fi
         exec "$VENV/bin/jupyter" lab --ServerApp.root_dir="$PWD" "$@" book/intro.md
         ;;
     submit)

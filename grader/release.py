@@ -47,6 +47,9 @@ from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
 
+from .module_graph import files_reached, ignored, module_file
+from .module_graph import imported_modules as third_party_imports
+
 GRADER_DIR = Path(__file__).resolve().parent
 REPO_ROOT = GRADER_DIR.parent
 TEMPLATES = GRADER_DIR / "release_files"
@@ -87,80 +90,8 @@ class ReleaseError(RuntimeError):
 
 
 # The student side of the grader -------------------------------------------------------------
-_FILE_LITERAL = re.compile(r"^[\w.-]+(?:/[\w.-]+)*\.(?:py|ini|cfg|toml|json|txt|csv|ya?ml)$")
-
-
-def _docstring_nodes(tree: ast.AST) -> set[int]:
-    ids = set()
-    for node in ast.walk(tree):
-        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and node.body:
-            first = node.body[0]
-            if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant) and isinstance(
-                    first.value.value, str):
-                ids.add(id(first.value))
-    return ids
-
-
-def _module_file(grader_dir: Path, parts: list[str]) -> Path | None:
-    base = grader_dir.joinpath(*parts) if parts else grader_dir
-    if parts and base.with_suffix(".py").is_file():
-        return base.with_suffix(".py")
-    if (base / "__init__.py").is_file():
-        return base / "__init__.py"
-    return None
-
-
-def references_of(path: Path, grader_dir: Path) -> list[tuple[Path, str]]:
-    """Files of ``grader_dir`` that the module ``path`` needs: the grader modules it
-    imports (anywhere in it, lazily too) and the files it names in string literals
-    (``"worker.py"``, ``"pytest.ini"``), each with how (``imports``, ``names``)."""
-    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
-    package = list(path.parent.relative_to(grader_dir).parts)
-    found: list[tuple[Path, str]] = []
-
-    def add_module(parts: list[str], names: list[str] = ()) -> None:
-        for depth in range(len(parts) + 1):   # the package __init__ files on the way
-            file = _module_file(grader_dir, parts[:depth])
-            if file is not None:
-                found.append((file, "imports"))
-        for name in names:   # ``from .package import module``
-            file = _module_file(grader_dir, parts + [name])
-            if file is not None:
-                found.append((file, "imports"))
-
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            for alias in node.names:
-                parts = alias.name.split(".")
-                if parts[0] == "grader":
-                    add_module(parts[1:])
-        elif isinstance(node, ast.ImportFrom):
-            names = [alias.name for alias in node.names if alias.name != "*"]
-            if node.level:
-                if node.level - 1 > len(package):
-                    continue
-                base = package[:len(package) - (node.level - 1)]
-                add_module(base + (node.module.split(".") if node.module else []), names)
-            elif node.module and node.module.split(".")[0] == "grader":
-                add_module(node.module.split(".")[1:], names)
-    docstrings = _docstring_nodes(tree)
-    for node in ast.walk(tree):
-        if (isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docstrings
-                and _FILE_LITERAL.match(node.value)):
-            for candidate in (path.parent / node.value, grader_dir / node.value):
-                if candidate.is_file():
-                    found.append((candidate, "names"))
-                    break
-            else:   # a bare name found deeper ("pytest.ini" of tests/); never-shipped places are not guessed
-                if "/" not in node.value:
-                    found += [(c, "names") for c in grader_dir.rglob(node.value) if c.is_file()
-                              and not _ignored(c.relative_to(grader_dir))
-                              and not _never(c.relative_to(grader_dir).as_posix())]
-    return found
-
-
 def _ignored(relative: Path) -> bool:
-    return any(part in IGNORED_NAMES for part in relative.parts) or relative.suffix == ".pyc"
+    return ignored(relative)
 
 
 def _never(relative: str) -> bool:
@@ -174,49 +105,30 @@ def student_grader_files(grader_dir: Path = GRADER_DIR) -> dict[str, str]:
     when that reaches a file of :data:`NEVER_SHIP`, or a shipped module imports the
     reference engine."""
     grader_dir = Path(grader_dir)
-    why: dict[str, str] = {}
-    queue: list[Path] = []
-
-    def want(file: Path, reason: str) -> None:
-        relative = file.relative_to(grader_dir).as_posix()
-        if relative in why:
-            return
-        if _never(relative):
-            raise ReleaseError(f"the student edition would need grader/{relative} ({reason}), which never ships "
-                               "to students: make the student side stop depending on it")
-        why[relative] = reason
-        queue.append(file)
-
-    for root in STUDENT_ROOTS:
-        if (grader_dir / root).is_file():
-            want(grader_dir / root, "student entry point")
+    start = [(grader_dir / root, "student entry point") for root in STUDENT_ROOTS if (grader_dir / root).is_file()]
     commands = _subcommand_modules(grader_dir / "cli.py")
     for name in STUDENT_COMMANDS:
         module = commands.get(name)
-        if module:
-            file = _module_file(grader_dir, module.split(".")[1:])
-            if file is not None:
-                want(file, f"the student command 'grader {name}'")
+        file = module_file(grader_dir, module.split(".")[1:]) if module else None
+        if file is not None:
+            start.append((file, f"the student command 'grader {name}'"))
     for folder in STUDENT_FOLDERS:
-        for file in sorted((grader_dir / folder).rglob("*")):
-            if file.is_file() and not _ignored(file.relative_to(grader_dir)):
-                want(file, "public graded tests")
-    while queue:
-        file = queue.pop(0)
-        relative = file.relative_to(grader_dir).as_posix()
-        for folder in file.relative_to(grader_dir).parents:   # packages on the way
-            init = grader_dir / folder / "__init__.py"
-            if str(folder) != "." and init.is_file():
-                want(init, f"package of {relative}")
-        if file.suffix != ".py":
-            continue
-        for needed, how in references_of(file, grader_dir):
-            want(needed, f"{how} by {relative}")
-        for module in third_party_imports(file.read_text(encoding="utf-8")):
-            if module.split(".")[0] == "solutions":
-                raise ReleaseError(f"grader/{relative} imports the reference engine ({module}) and ships to "
-                                   "students: a public test or its oracle must not use solutions")
-    return dict(sorted(why.items()))
+        start += [(file, "public graded tests") for file in sorted((grader_dir / folder).rglob("*"))
+                  if file.is_file() and not _ignored(file.relative_to(grader_dir))]
+
+    def refuse_never(relative: str, reason: str) -> None:
+        if _never(relative):
+            raise ReleaseError(f"the student edition would need grader/{relative} ({reason}), which never ships "
+                               "to students: make the student side stop depending on it")
+
+    why = files_reached(grader_dir, start, want=refuse_never, excluded=_never)
+    for relative in why:
+        if relative.endswith(".py"):
+            for module in third_party_imports((grader_dir / relative).read_text(encoding="utf-8")):
+                if module.split(".")[0] == "solutions":
+                    raise ReleaseError(f"grader/{relative} imports the reference engine ({module}) and ships to "
+                                       "students: a public test or its oracle must not use solutions")
+    return why
 
 
 def _subcommand_modules(cli: Path) -> dict[str, str]:
@@ -234,18 +146,6 @@ def _subcommand_modules(cli: Path) -> dict[str, str]:
                     out[key.value] = value.elts[0].value
             return out
     return {}
-
-
-def third_party_imports(source: str) -> list[str]:
-    """Absolute module names imported by ``source`` (anywhere in it)."""
-    tree = ast.parse(source)
-    names = []
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            names += [alias.name for alias in node.names]
-        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
-            names.append(node.module)
-    return names
 
 
 def public_tests_using_reference(grader_dir: Path = GRADER_DIR) -> list[str]:

@@ -42,6 +42,8 @@ from .outcome import STATUS_MEANINGS
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 PACKAGE_VARIABLE = "GRADER_CHECK_PACKAGE"
+#: The file at the top of a student edition (written by ``grader release``).
+RELEASE_MARKER = ".course-release.json"
 #: Folder (under the system's temporary folder) where the shell command saves pictures.
 FIGURES_FOLDER = "check-figures"
 
@@ -142,7 +144,7 @@ class CheckReport:
         else:
             head = ", ".join(parts)
         return (f"Score {_points(self.score)}/{_points(self.max_score)} points: {head}. "
-                "These are the public tests; more tests run when you submit.")
+                "These are the public tests; more tests run when your work is graded.")
 
     def text(self, color: bool = False, width: int | None = None) -> str:
         """The plain-text table of the shell command."""
@@ -227,6 +229,18 @@ def _shown_path(path: Path) -> str:
         except ValueError:
             continue
     return str(path)
+
+
+def in_student_edition() -> bool:
+    """True when this grader is the student edition's (a course folder made by
+    ``grader release``, whose README teaches ``bash run.sh``)."""
+    return (REPO_ROOT / RELEASE_MARKER).is_file() and (REPO_ROOT / "run.sh").is_file()
+
+
+def command_name(command: str) -> str:
+    """How the user runs ``grader <command>`` here: ``bash run.sh <command>`` in the
+    student edition, ``grader <command>`` elsewhere."""
+    return f"{'bash run.sh' if in_student_edition() else 'grader'} {command}"
 
 
 def student_message(row: CheckRow) -> str:
@@ -483,7 +497,7 @@ def main_check(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     """``python -m grader.check [EXERCISE] [--package PATH] [--figures DIR]``."""
     parser = add_check_arguments(argparse.ArgumentParser(
-        prog="grader check", description="Run the public tests of an exercise on your code."))
+        prog=command_name("check"), description="Run the public tests of an exercise on your code."))
     return main_check(parser.parse_args(argv))
 
 

@@ -40,7 +40,11 @@ def list_tests(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="grader", description="Autograder of the collision course.")
+    from .check import in_student_edition
+
+    # The student edition's README teaches `bash run.sh check`: usage lines say so.
+    parser = argparse.ArgumentParser(prog="bash run.sh" if in_student_edition() else "grader",
+                                     description="Autograder of the collision course.")
     commands = parser.add_subparsers(dest="command", required=True)
     for name, (module_name, add_arguments, main_name, help_text) in SUBCOMMANDS.items():
         try:

@@ -455,6 +455,35 @@ def _copy_tree(source: Path, target: Path) -> list[Path]:
     return written
 
 
+#: The grader's commands as the student edition's README teaches them (its run.sh's).
+STUDENT_COMMANDS_NAMED = {"`grader check": "`bash run.sh check", "`grader submit": "`bash run.sh submit"}
+#: The generator's record of the files it wrote (tools/generate_exercises.py), kept true.
+GENERATED_RECORD = ".generated.json"
+
+
+def name_student_commands(exercises: Path) -> list[str]:
+    """Say `bash run.sh check ...` where the ``exercises`` files (their headers and the
+    stubs' NotImplementedError) say `grader check ...`; the generator's record of their
+    hashes follows.  Returns the files rewritten, relative to ``exercises``."""
+    rewritten = []
+    for path in sorted(exercises.rglob("*.py")):
+        text = path.read_text(encoding="utf-8")
+        named = text
+        for old, new in STUDENT_COMMANDS_NAMED.items():
+            named = named.replace(old, new)
+        if named != text:
+            path.write_text(named, encoding="utf-8")
+            rewritten.append(path.relative_to(exercises).as_posix())
+    record = exercises / GENERATED_RECORD
+    if rewritten and record.is_file():
+        data = json.loads(record.read_text(encoding="utf-8"))
+        for name in rewritten:
+            if name in data.get("sha256", {}):
+                data["sha256"][name] = _sha256(exercises / name)
+        record.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
+    return rewritten
+
+
 def _fill(template: str, values: dict[str, str]) -> str:
     for key, value in values.items():
         template = template.replace("{{" + key + "}}", value)
@@ -560,6 +589,7 @@ def write_student(target: Path, repo_root: Path = REPO_ROOT) -> dict:
     if not (repo_root / "exercises" / "__init__.py").is_file():
         raise ReleaseError(f"{repo_root / 'exercises'} is not a package: run `python -m tools.generate_exercises`")
     _copy_tree(repo_root / "exercises", target / "exercises")
+    name_student_commands(target / "exercises")
     grader_files = student_grader_files(grader_dir)
     for relative in grader_files:
         destination = target / "grader" / relative

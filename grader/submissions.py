@@ -95,8 +95,11 @@ MANIFEST_VERSION = 1
 COURSE_NAME = "collision-course"
 #: Largest manifest read (bytes).
 MAX_MANIFEST_BYTES = 4 * 1024**2
+#: The command that writes the zip, as the student edition's README teaches it: refusals
+#: are read by students, who hold the student edition.
+SUBMIT_COMMAND = "bash run.sh submit"
 #: What to do when a manifest does not match (appended to every such refusal).
-RESUBMIT = "run `grader submit` again and hand in the zip it writes, unchanged"
+RESUBMIT = f"run `{SUBMIT_COMMAND}` again and hand in the zip it writes, unchanged"
 
 
 class SubmissionRefused(Exception):
@@ -224,7 +227,7 @@ def _link_refusal(path: Path, where: str) -> SubmissionRefused:
     except OSError:
         target = ""
     return SubmissionRefused(f"{where} is a symbolic link{target}; the grader never follows links: hand in "
-                             "your files themselves (the zip `grader submit` writes never holds a link)")
+                             f"your files themselves (the zip `{SUBMIT_COMMAND}` writes never holds a link)")
 
 
 def checked_path(path: str | os.PathLike) -> os.stat_result:
@@ -524,7 +527,7 @@ def read_manifest(path: Path) -> dict:
     except (OSError, ValueError) as exc:
         raise damaged(f"not readable JSON: {exc}") from None
     if not isinstance(data, dict) or data.get("format") != MANIFEST_FORMAT:
-        raise damaged(f"not a manifest written by `grader submit`: no \"format\": \"{MANIFEST_FORMAT}\"")
+        raise damaged(f"not a manifest written by `{SUBMIT_COMMAND}`: no \"format\": \"{MANIFEST_FORMAT}\"")
     if data.get("format_version") != MANIFEST_VERSION:
         raise SubmissionRefused(f"{MANIFEST_NAME} has format version {data.get('format_version')!r}; this grader "
                                 f"reads version {MANIFEST_VERSION}: update your course files, then {RESUBMIT}")
@@ -586,7 +589,7 @@ def verify_manifest(folder: str | os.PathLike) -> dict | None:
             shown = _shown("/".join(parts))
             mode = os.lstat(full).st_mode
             if stat.S_ISLNK(mode):
-                problems.append(f"{shown} is a symbolic link; `grader submit` never puts links in the zip")
+                problems.append(f"{shown} is a symbolic link; `{SUBMIT_COMMAND}` never puts links in the zip")
             elif stat.S_ISDIR(mode) or parts == (MANIFEST_NAME,) or _ignored(parts):
                 continue
             elif not stat.S_ISREG(mode):
@@ -599,13 +602,13 @@ def verify_manifest(folder: str | os.PathLike) -> dict | None:
         path = present.get(parts)
         if path is None:
             problems.append(f"file {shown} is listed in {MANIFEST_NAME} but missing: it was removed after "
-                            "`grader submit` wrote the zip")
+                            f"`{SUBMIT_COMMAND}` wrote the zip")
         elif path.stat().st_size != entry["size"] or _file_digest(path) != entry["sha256"].lower():
-            problems.append(f"file {shown} was changed after `grader submit` wrote the zip (its size or sha256 "
+            problems.append(f"file {shown} was changed after `{SUBMIT_COMMAND}` wrote the zip (its size or sha256 "
                             f"differs from {MANIFEST_NAME})")
     for parts in sorted(set(present) - set(listed)):
         problems.append(f"file {_shown('/'.join(parts))} is not in {MANIFEST_NAME}: it was added after "
-                        "`grader submit` wrote the zip")
+                        f"`{SUBMIT_COMMAND}` wrote the zip")
     if problems:
         more = f" (and {len(problems) - 1} more difference{'s' if len(problems) > 2 else ''})" \
             if len(problems) > 1 else ""

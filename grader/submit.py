@@ -342,8 +342,10 @@ def main_submit(args: argparse.Namespace) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m grader.submit [--name NAME] [--out PATH] [--package PATH] [--check]``."""
+    from .check import command_name
+
     parser = add_submit_arguments(argparse.ArgumentParser(
-        prog="grader submit", description="Write the zip to hand in: your exercises and a manifest of their hashes."))
+        prog=command_name("submit"), description="Write the zip to hand in: your exercises and a manifest of their hashes."))
     return main_submit(parser.parse_args(argv))
 
 

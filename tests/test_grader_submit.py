@@ -204,8 +204,8 @@ def test_a_changed_file_is_refused_naming_it(handed_in, tmp_path):
     changed = rewrite(handed_in.zip, tmp_path / "changed.zip",
                       lambda n, d: None if n is None else d + b"# edited\n" if n == "exercises/vector.py" else d)
     message = refusal(changed, tmp_path)
-    assert "exercises/vector.py" in message and "was changed after `grader submit` wrote the zip" in message
-    assert "run `grader submit` again" in message
+    assert "exercises/vector.py" in message and "was changed after `bash run.sh submit` wrote the zip" in message
+    assert "run `bash run.sh submit` again" in message
 
 
 def test_an_added_or_removed_file_is_refused(handed_in, tmp_path):
@@ -282,5 +282,5 @@ def test_a_submitted_zip_grades_and_a_tampered_one_is_refused(handed_in, tmp_pat
     assert rows["ada"]["score"] == pytest.approx(sum(t.points for t in momentum)) == rows["ada"]["max_score"]
     for name in ("eve", "gradescope"):
         assert rows[name]["state"] == "refused" and rows[name]["score"] == 0
-        assert "exercises/response/momentum_1d.py' was changed after `grader submit` wrote the zip" \
+        assert "exercises/response/momentum_1d.py' was changed after `bash run.sh submit` wrote the zip" \
             in rows[name]["message"]

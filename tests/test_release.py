@@ -341,6 +341,23 @@ def test_import_solutions_fails_in_the_student_folder(release):
     assert set(commands) <= {"check", "submit", "list"} and "check" in commands, result.stdout
 
 
+def test_the_student_edition_names_the_commands_its_readme_teaches(release):
+    """The README teaches `bash run.sh check` and `bash run.sh submit`: the stubs, the
+    exercise headers and the grader's usage lines in the student edition say so too."""
+    student = release.student
+    exercises = student / "exercises"
+    texts = {p.relative_to(exercises).as_posix(): p.read_text(encoding="utf-8") for p in exercises.rglob("*.py")}
+    assert not [name for name, text in texts.items() if "`grader check" in text or "`grader submit" in text]
+    assert "then run `bash run.sh check momentum`" in texts["response/momentum_1d.py"]
+    record = json.loads((exercises / ".generated.json").read_text(encoding="utf-8"))["sha256"]
+    from grader.release import _sha256
+    assert {name: _sha256(exercises / name) for name in record} == record, "the generator's record went stale"
+    for command in ("check", "submit"):
+        result = subprocess.run([PYTHON, "-S", "-c", STUDENT_GRADER, command, "--help"], cwd=student,
+                                env=student_env(student), capture_output=True, text=True, timeout=60)
+        assert result.returncode == 0 and f"usage: bash run.sh {command}" in result.stdout, result.stdout
+
+
 # The student's grader ------------------------------------------------------------------------------
 #: A test's line in ``grader check``'s table: label, score/points, title, [name].
 ROW = re.compile(r"^(?P<label>[A-Z][A-Z_ ]*[A-Z])\s+(?P<score>[\d.]+)/(?P<points>[\d.]+)\s+.*"

@@ -344,7 +344,8 @@ def select_tests(exercise: str | None = None) -> list:
     """The public tests of ``exercise`` (an exercise name or one test's name; None: all)."""
     from .spec import EXERCISES, load_spec
 
-    public = [t for t in load_spec() if t.public]
+    # In chapter order (EXERCISES), each exercise's tests in the order of their module.
+    public = sorted((t for t in load_spec() if t.public), key=lambda t: EXERCISES.index(t.exercise))
     if exercise is None:
         return public
     name = str(exercise).strip()
@@ -402,8 +403,9 @@ def check(exercise: str | None = None, package: str | Path | None = None, show: 
     Parameters
     ----------
     exercise : str, optional
-        ``"momentum"``, ``"grid"``, ``"quadtree"``, ``"sat"``, ``"contacts"`` or
-        ``"impulse"`` (or one test's name); None runs every public test.
+        ``"grid"``, ``"quadtree"``, ``"sat"``, ``"contacts"``, ``"momentum"``,
+        ``"impulse"`` or ``"sequential"`` (or one test's name); None runs every public
+        test, in the order of the chapters.
     package : str or Path, optional
         Folder of the package to check (default: your ``exercises`` folder, see the
         module docstring); ``"solutions"`` checks the reference.
@@ -443,8 +445,10 @@ def _use_color(stream) -> bool:
 
 def add_check_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """Add ``[EXERCISE] [--package PATH] [--figures DIR]`` to ``parser``; return it."""
+    from .spec import EXERCISES
+
     parser.add_argument("exercise", nargs="?", default=None,
-                        help="momentum, grid, quadtree, sat, contacts or impulse (or one test's name); "
+                        help=f"{', '.join(EXERCISES[:-1])} or {EXERCISES[-1]} (or one test's name); "
                              "default: every exercise")
     parser.add_argument("--package", metavar="PATH", default=None,
                         help=f"the package to check (default: ./exercises, or ${PACKAGE_VARIABLE}); "

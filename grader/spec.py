@@ -14,7 +14,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 VISIBILITIES = ("visible", "hidden", "after_due_date", "after_published")
-EXERCISES = ("momentum", "grid", "quadtree", "sat", "contacts", "impulse", "sequential")
+#: The exercises in the order the book teaches them (its chapters 3, 5, 6, 7, 8 and 10):
+#: ``grader check`` lists them in this order.
+EXERCISES = ("grid", "quadtree", "sat", "contacts", "momentum", "impulse", "sequential")
 
 
 class SpecError(ValueError):

@@ -9,65 +9,122 @@ and its code cells start with a line such as::
 The cell below that line runs as usual, on your ``exercises`` package.  When it stops
 at a function you have not written yet (a ``NotImplementedError``), the cell prints one
 line naming that function and then shows the output the reference engine gave when the
-edition was made, stored in ``reference_outputs/<chapter>.json`` next to the notebooks.
+edition was made: the output the notebook file (``<chapter>.ipynb``, as last saved)
+holds for that cell, as long as it is still the reference's (the cell's metadata keeps
+its digest; once your own run of the cell has been saved over it, the line says so).
 Once an earlier cell of the same kernel session has fallen back like this, any error of
 a later cell falls back too (it most likely needs a value the earlier cell did not
 compute).  Any other error is shown as usual: it is a bug to fix.
 
 The ``check(...)`` cells carry no such line: they always run the public tests on your
 code.
+
+``from grader.notebook import glue`` stands in for myst-nb's ``glue`` (which files a
+value for the printed book to quote): here it shows the value if asked to, and files
+nothing.
 """
 from __future__ import annotations
 
 import ast
+import hashlib
 import importlib.util
 import json
 import os
 import sys
 from pathlib import Path
 
-#: Folder of the stored outputs, next to the chapter notebooks.
-OUTPUTS_FOLDER = "reference_outputs"
-#: Environment variable naming that folder explicitly.
-OUTPUTS_VARIABLE = "COURSE_REFERENCE_OUTPUTS"
-#: The line a falling-back cell prints first (``{needs}``: what it needs).
+#: Environment variable naming the folder of the chapter notebooks explicitly.
+NOTEBOOKS_VARIABLE = "COURSE_NOTEBOOKS"
+#: Cell metadata of the student edition: ``{"digest": outputs_digest(reference outputs)}``.
+METADATA_KEY = "reference_fallback"
+#: The line a falling-back cell shows first (``{needs}``: what it needs), as display data
+#: whose metadata holds ``{METADATA_KEY: NOTICE_MARK}``.
 NOTICE = "[reference output] this cell needs {needs}, which you have not written yet; {rest}"
+NOTICE_MARK = "notice"
 
 _HERE = os.path.abspath(__file__)
 _session: dict = {"missing": []}   # functions found missing in this kernel session, in order
-_loaded: dict[Path, dict] = {}
+_loaded: dict[Path, tuple[int, dict]] = {}   # notebook -> (mtime in ns, its JSON)
 
 
 # Where the stored outputs are --------------------------------------------------------------
-def _outputs_folders() -> list[Path]:
+def _text(value) -> str:
+    return "".join(value) if isinstance(value, list) else str(value)
+
+
+def is_notice(output: dict) -> bool:
+    """The fallback's own line, not an output of the cell."""
+    return output.get("metadata", {}).get(METADATA_KEY) == NOTICE_MARK
+
+
+def outputs_digest(outputs: list[dict]) -> str:
+    """SHA-256 of the outputs as a person sees them, the same after JupyterLab saved
+    them again: consecutive streams of one name joined, results as display data,
+    text without its trailing whitespace, output metadata and the notice left out."""
+    items: list = []
+    for output in outputs:
+        kind = output.get("output_type")
+        if kind == "stream":
+            text = _text(output.get("text", ""))
+            if items and items[-1][:2] == ["stream", output.get("name")]:
+                items[-1][2] += text
+            else:
+                items.append(["stream", output.get("name"), text])
+        elif kind in ("display_data", "execute_result") and not is_notice(output):
+            items.append(["data", {mime: value if isinstance(value, dict) else _text(value).rstrip()
+                                   for mime, value in output.get("data", {}).items()}])
+        elif kind == "error":
+            items.append(["error", output.get("ename"), output.get("evalue")])
+    for item in items:
+        if item[0] == "stream":
+            item[2] = item[2].rstrip()
+    return hashlib.sha256(json.dumps(items, sort_keys=True).encode("utf-8")).hexdigest()
+
+
+def _notebook_folders() -> list[Path]:
     folders = []
-    if os.environ.get(OUTPUTS_VARIABLE):
-        folders.append(Path(os.environ[OUTPUTS_VARIABLE]))
+    if os.environ.get(NOTEBOOKS_VARIABLE):
+        folders.append(Path(os.environ[NOTEBOOKS_VARIABLE]))
     cwd = Path.cwd()
-    folders += [cwd / OUTPUTS_FOLDER, cwd / "book" / OUTPUTS_FOLDER]
+    folders += [cwd, cwd / "book"]
     try:
         spec = importlib.util.find_spec("exercises")
     except (ImportError, ValueError):
         spec = None
     if spec is not None and spec.origin:
-        folders.append(Path(spec.origin).resolve().parent.parent / "book" / OUTPUTS_FOLDER)
+        folders.append(Path(spec.origin).resolve().parent.parent / "book")
     return folders
 
 
-def stored_outputs(key: str) -> list[dict] | None:
-    """The stored outputs of the cell ``CHAPTER:CELL_ID`` (None when none are found)."""
-    chapter, _, cell = key.strip().partition(":")
-    for folder in _outputs_folders():
-        path = folder / f"{chapter}.json"
-        if path not in _loaded:
-            try:
-                _loaded[path] = json.loads(path.read_text(encoding="utf-8"))
-            except (OSError, ValueError):
-                continue
-        cells = _loaded[path].get("cells", _loaded[path])
-        if cell in cells:
-            return list(cells[cell])
-    return None
+def _read_notebook(path: Path) -> dict | None:
+    try:
+        mtime = path.stat().st_mtime_ns
+        if path not in _loaded or _loaded[path][0] != mtime:
+            _loaded[path] = (mtime, json.loads(path.read_text(encoding="utf-8")))
+    except (OSError, ValueError):
+        return None
+    return _loaded[path][1]
+
+
+def stored_outputs(key: str) -> tuple[list[dict] | None, str]:
+    """The reference outputs of the cell ``CHAPTER:CELL_ID`` as its notebook file holds
+    them, and, when there are none (None), why."""
+    chapter, _, cell_id = key.strip().partition(":")
+    replaced = None
+    for folder in _notebook_folders():
+        nb = _read_notebook(folder / f"{chapter}.ipynb")
+        cell = next((c for c in (nb or {}).get("cells", []) if c.get("id") == cell_id), None)
+        if cell is None:
+            continue
+        outputs = [o for o in cell.get("outputs", []) if not is_notice(o)]
+        digest = cell.get("metadata", {}).get(METADATA_KEY, {}).get("digest")
+        if digest and outputs_digest(outputs) == digest:
+            return outputs, ""
+        replaced = folder / f"{chapter}.ipynb"
+    if replaced is not None:
+        return None, (f"the reference output is no longer in {replaced.name}: a run of the cell on your code was saved "
+                      "over it")
+    return None, f"no stored output was found for it (cell {cell_id} of {chapter}.ipynb)"
 
 
 def show_outputs(outputs: list[dict]) -> None:
@@ -198,7 +255,7 @@ def reference_fallback(line: str, cell: str):
             _with_short_traceback(shell, exc)
             raise
         _close_new_figures(figures)
-        outputs = stored_outputs(key)
+        outputs, why_none = stored_outputs(key)
         if missing is not None:
             if missing not in _session["missing"]:
                 _session["missing"].append(missing)
@@ -210,15 +267,25 @@ def reference_fallback(line: str, cell: str):
         if outputs:
             rest = "the output below is the reference engine's."
         elif outputs is None:
-            rest = f"no stored output was found for it ({key})."
+            rest = why_none + "."
         else:
             rest = "it shows no output."
-        from IPython.display import clear_output
+        from IPython.display import clear_output, publish_display_data
 
         clear_output()   # what the cell printed before it stopped: the reference output replaces it
-        print(NOTICE.format(needs=needs, rest=rest), flush=True)
+        publish_display_data({"text/plain": NOTICE.format(needs=needs, rest=rest)},
+                             metadata={METADATA_KEY: NOTICE_MARK})
         show_outputs(outputs or [])
         return None
+
+
+def glue(name: str, variable, display: bool = True) -> None:
+    """myst-nb's ``glue`` in the student edition: files nothing (the chapters' text quotes
+    the reference's values), shows ``variable`` when ``display`` is true."""
+    if display:
+        from IPython.display import display as show
+
+        show(variable)
 
 
 def load_ipython_extension(ipython) -> None:

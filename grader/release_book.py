@@ -8,15 +8,23 @@ Each ``book/chapters/NN_name.ipynb`` (executed, outputs stored) becomes
   instead, and :func:`check_code` proves that no cell imports ``solutions``;
 - a first code cell ``%load_ext grader.notebook`` is inserted, and every other code
   cell starts with ``%%reference_fallback NN_name:CELL_ID`` (see
-  :mod:`grader.notebook`): it runs on the student's package, and shows its stored
-  output, kept in ``reference_outputs/NN_name.json``, until the functions it needs are
-  written;
+  :mod:`grader.notebook`): it runs on the student's package, and shows the reference
+  output stored with it in the notebook (the cell's metadata keeps their digest, by
+  which the fallback knows them from the student's own) until the functions it needs
+  are written;
+- ``from myst_nb import glue`` imports :func:`grader.notebook.glue` instead, which shows
+  nothing (the student edition needs neither myst-nb nor Sphinx), and the glued values,
+  stored as outputs no viewer renders, are left out;
 - the cells that call ``check(...)`` are left as they are, without outputs (the stored
   ones were the reference's full marks): they run the student's public tests;
 - MyST markup (roles such as ``{term}``, ``{ref}``, ``{numref}``; directives such as
   ``{admonition}``, ``{exercise}``, ``{solution}``, ``{glossary}``) becomes Markdown
   that JupyterLab renders, cross references becoming links between the notebooks, and
-  each figure's caption (cell metadata the notebook does not show) a line under it.
+  each figure's caption (cell metadata the notebook does not show) a line under it;
+- a ``{glue:text}`key:format``` role becomes the value the chapter glued under ``key``
+  (formatted as myst-nb formats it), and a paragraph that quotes such values ends with
+  :data:`GLUED_NOTE`: they are the reference engine's, whatever the student's code
+  computes.
 
 ``book/intro.md``, ``conventions.md`` and ``glossary.md`` become plain Markdown pages
 beside the notebooks.
@@ -27,15 +35,15 @@ import ast
 import copy
 import functools
 import html
-import json
 import re
 from dataclasses import dataclass
 from pathlib import Path
 
+from .notebook import METADATA_KEY, outputs_digest
+
 SOURCE_PACKAGE = "solutions"
 TARGET_PACKAGE = "exercises"
 MAGIC = "reference_fallback"
-OUTPUTS_FOLDER = "reference_outputs"   # grader.notebook.OUTPUTS_FOLDER
 READING_PAGES = ("intro", "conventions", "glossary")
 SETUP_CELL_ID = "student-edition-setup"
 SETUP_SOURCE = (
@@ -61,6 +69,12 @@ STUDENT_WORDING = (
     ("On these pages the checks run against the reference engine, so they show a passing run.",
      "In your copy they run on your own code."),
 )
+#: The end of a paragraph that quotes values the chapter glued (the reference engine's).
+GLUED_NOTE = "*(The numbers quoted here come from the reference engine's run of this chapter.)*"
+#: Glue: the instructor's import, and the student edition's (a function that shows nothing).
+GLUE_IMPORT = re.compile(r"^(\s*)from\s+myst_nb\s+import\s+glue\s*$", re.M)
+STUDENT_GLUE_IMPORT = r"\1from grader.notebook import glue"
+GLUE_PREFIX = "application/papermill.record/"   # myst_nb's GLUE_PREFIX: a glued value, not shown
 TEXT_MIMES = ("text/plain", "text/html", "text/markdown", "text/latex")
 ADMONITIONS = ("note", "warning", "tip", "important", "hint", "caution", "attention", "danger", "error",
                "seealso")
@@ -223,10 +237,12 @@ def labels_of_markdown(text: str, page: str, top_level_is_page: bool = True) -> 
 class MystToMarkdown:
     """MyST markdown -> Markdown that JupyterLab (and any Markdown viewer) renders."""
 
-    def __init__(self, labels: dict[str, Label], page: str, contents: list[tuple[str, str]] = ()):
+    def __init__(self, labels: dict[str, Label], page: str, contents: list[tuple[str, str]] = (),
+                 glued: dict[str, str] | None = None):
         self.labels = labels
         self.page = page
         self.contents = list(contents)   # (file, title) of every page, for {tableofcontents}
+        self.glued = dict(glued or {})   # glue key -> its text/plain, as the chapter glued it
 
     # Inline -----------------------------------------------------------------------------------
     def _link(self, text: str, label: Label | None) -> str:
@@ -236,8 +252,28 @@ class MystToMarkdown:
             return f"[{text}](#{label.anchor})" if label.anchor else text
         return f"[{text}]({label.page}{'#' + label.anchor if label.anchor else ''})"
 
+    def glue_role(self, name: str, content: str) -> str:
+        """The value of ``{glue:text}`key:format``` (``{glue}``, ``{glue:}`` alike), as
+        myst-nb formats its text/plain."""
+        from myst_nb.core.variables import format_plain_text
+
+        key, _, spec = content.strip().split("::")[-1].partition(":")   # [document::]key[:format]
+        if key not in self.glued:
+            raise BookConversionError(f"{self.page}: {{{name}}}`{content}` names {key!r}, which the chapter does "
+                                      f"not glue (glued: {', '.join(sorted(self.glued)) or 'nothing'})")
+        try:
+            return format_plain_text(self.glued[key], spec)
+        except (ValueError, TypeError) as exc:
+            raise BookConversionError(f"{self.page}: {{{name}}}`{content}`: cannot format {self.glued[key]!r} "
+                                      f"with {spec!r} ({exc})") from None
+
     def role(self, match: re.Match) -> str:
         name, content = match.group(1), match.group(2)
+        if name in ("glue", "glue:", "glue:text", "glue:any"):
+            return self.glue_role(name, content)
+        if name.startswith("glue:"):
+            raise BookConversionError(f"{self.page}: the student edition renders no {{{name}}} role "
+                                      "(only {glue:text})")
         text, target = _explicit(content)
         if name == "term":
             shown = text or target
@@ -336,6 +372,9 @@ class MystToMarkdown:
         return "\n".join(f"> {line}".rstrip() for line in lines)
 
     def directive(self, name: str, argument: str, options: dict, body: str) -> str:
+        if name == "glue" or name.startswith("glue:"):
+            raise BookConversionError(f"{self.page}: the student edition renders no {{{name}}} directive "
+                                      "(only the {glue:text} role)")
         inner = self.convert(body) if body else ""
         if name == "admonition":
             return self.quoted(self.inline(argument) or "Note", inner)
@@ -410,6 +449,18 @@ def book_labels(chapters: list[tuple[str, object]], pages: dict[str, str]) -> di
     return labels
 
 
+#: An image inlined in HTML (the frames of matplotlib's ``to_jshtml`` animations), whose
+#: base64 is cut into lines by JavaScript line continuations (backslash, newline).
+_INLINE_IMAGE = re.compile(r"(data:image/[\w+.-]+;base64,)((?:[A-Za-z0-9+/=]|\\\n)+)")
+
+
+def join_inline_images(html_text: str) -> str:
+    """``html_text`` with each inlined image's base64 on one line: the same JavaScript
+    strings (a line continuation adds nothing to a string), about 15 % fewer bytes in a
+    notebook, which stores each line of an output as a JSON string of its own."""
+    return _INLINE_IMAGE.sub(lambda m: m.group(1) + m.group(2).replace("\\\n", ""), html_text)
+
+
 def _rewrite_output(output: dict) -> dict:
     output = copy.deepcopy(output)
     if output.get("output_type") == "stream":
@@ -419,16 +470,46 @@ def _rewrite_output(output: dict) -> dict:
         if mime in output.get("data", {}):
             value = output["data"][mime]
             output["data"][mime] = rewrite_code("".join(value) if isinstance(value, list) else value)
+    if "text/html" in output.get("data", {}):
+        output["data"]["text/html"] = join_inline_images(output["data"]["text/html"])
     return output
 
 
-def student_notebook(nb, stem: str, converter: MystToMarkdown) -> tuple[object, dict]:
-    """The student edition of the executed chapter ``nb`` and its stored outputs
-    (``{"chapter": stem, "cells": {cell id: [outputs]}}``)."""
-    import nbformat
+def glued_values(nb) -> dict[str, str]:
+    """The values an executed chapter glued (``glue(key, value)`` of myst-nb): key -> the
+    value's text/plain."""
+    values = {}
+    for cell in nb.cells:
+        for output in cell.get("outputs", []) if cell.cell_type == "code" else []:
+            record = output.get("metadata", {}).get("scrapbook")
+            if isinstance(record, dict) and record.get("name"):
+                prefix = record.get("mime_prefix", "")
+                text = output.get("data", {}).get(f"{prefix}text/plain")
+                if text is not None:
+                    values[record["name"]] = "".join(text) if isinstance(text, list) else text
+    return values
 
+
+def _is_hidden_glue(output: dict) -> bool:
+    """A value glued with ``display=False``: data no notebook viewer renders."""
+    data = output.get("data", {})
+    return bool(data) and all(mime.startswith(GLUE_PREFIX) for mime in data)
+
+
+_GLUE_ROLE = re.compile(r"\{glue(:\w*)?\}`")
+
+
+def mark_glued_paragraphs(source: str) -> str:
+    """MyST ``source`` with :data:`GLUED_NOTE` ending each paragraph that quotes a glued value."""
+    parts = re.split(r"(\n[ \t]*\n)", source)   # paragraphs, and the blank lines between them
+    return "".join(f"{part.rstrip()}\n{GLUED_NOTE}{part[len(part.rstrip()):]}"
+                   if index % 2 == 0 and _GLUE_ROLE.search(part) else part for index, part in enumerate(parts))
+
+
+def student_notebook(nb, stem: str, converter: MystToMarkdown):
+    """The student edition of the executed chapter ``nb``."""
+    import nbformat
     nb = copy.deepcopy(nb)
-    stored: dict[str, list] = {}
     cells = []
     figure_number = 0
     chapter_number = int(stem[:2]) if stem[:2].isdigit() else 0
@@ -437,27 +518,27 @@ def student_notebook(nb, stem: str, converter: MystToMarkdown) -> tuple[object, 
         cell["id"] = cell_id
         where = f"{stem}.ipynb, cell {index} ({cell_id})"
         if cell.cell_type == "markdown":
-            cell.source = converter.convert(cell.source)
+            cell.source = converter.convert(mark_glued_paragraphs(cell.source))
             cells.append(cell)
             continue
         if cell.cell_type != "code":
             cells.append(cell)
             continue
-        source = rewrite_code(cell.source)
+        source = GLUE_IMPORT.sub(STUDENT_GLUE_IMPORT, rewrite_code(cell.source))
         check_code(source, where)
-        cell.outputs = [_rewrite_output(o) for o in cell.get("outputs", [])]
+        cell.outputs = [_rewrite_output(o) for o in cell.get("outputs", []) if not _is_hidden_glue(o)]
         if is_check_cell(source):
             cell.outputs = []
             cell.execution_count = None
         elif not source.lstrip().startswith("%%"):
-            stored[cell_id] = cell.outputs
+            cell.metadata[METADATA_KEY] = {"digest": outputs_digest(cell.outputs)}
             source = f"%%{MAGIC} {stem}:{cell_id}\n{source}"
         cell.source = source
         cells.append(cell)
         figure = cell.get("metadata", {}).get("mystnb", {}).get("figure")
         if isinstance(figure, dict) and (figure.get("name") or figure.get("caption")):
             figure_number += 1
-            caption = converter.convert(str(figure.get("caption", ""))).strip()
+            caption = converter.convert(mark_glued_paragraphs(str(figure.get("caption", "")))).strip()
             caption_cell = nbformat.v4.new_markdown_cell(
                 f"*Fig. {chapter_number}.{figure_number}.*" + (f" {caption}" if caption else ""))
             caption_cell["id"] = f"{cell_id}-caption"
@@ -469,7 +550,7 @@ def student_notebook(nb, stem: str, converter: MystToMarkdown) -> tuple[object, 
     nb.cells = cells
     nb.metadata.pop("jupytext", None)
     nbformat.validate(nb)
-    return nb, {"chapter": stem, "cells": stored}
+    return nb
 
 
 def convert_page(text: str, stem: str, converter: MystToMarkdown) -> str:
@@ -500,15 +581,13 @@ def write_book(chapters_dir: Path, pages_dir: Path, target: Path) -> dict:
                                                 stem))) for stem, text in pages.items() if stem == "conventions"]
     contents += [(f"{stem}.ipynb", chapter_title(nb)) for stem, nb in chapters]
     contents += [("glossary.md", "Glossary")] if "glossary" in pages else []
-    (target / OUTPUTS_FOLDER).mkdir(parents=True, exist_ok=True)
+    target.mkdir(parents=True, exist_ok=True)
     written = {"notebooks": [], "pages": [], "tools_modules": set()}
     for stem, nb in chapters:
-        converter = MystToMarkdown(labels, f"{stem}.ipynb", contents)
-        student, stored = student_notebook(nb, stem, converter)
+        converter = MystToMarkdown(labels, f"{stem}.ipynb", contents, glued_values(nb))
+        student = student_notebook(nb, stem, converter)
         with open(target / f"{stem}.ipynb", "w", encoding="utf-8") as handle:
             nbformat.write(student, handle)
-        (target / OUTPUTS_FOLDER / f"{stem}.json").write_text(json.dumps(stored, indent=None) + "\n",
-                                                              encoding="utf-8")
         written["notebooks"].append((f"{stem}.ipynb", chapter_title(nb)))
         for cell in student.cells:
             if cell.cell_type == "code":

@@ -498,11 +498,19 @@ def repository_commit(repo_root: Path = REPO_ROOT) -> tuple[str | None, bool]:
     try:
         commit = subprocess.run(["git", "-C", str(repo_root), "rev-parse", "HEAD"], capture_output=True, text=True,
                                 timeout=30, check=True).stdout.strip()
-        status = subprocess.run(["git", "-C", str(repo_root), "status", "--porcelain"], capture_output=True,
-                                text=True, timeout=30, check=True).stdout
-        return commit, bool(status.strip())
     except (OSError, subprocess.SubprocessError):
         return None, False
+    return commit, bool(changed_files(repo_root))
+
+
+def changed_files(repo_root: Path = REPO_ROOT) -> list[str]:
+    """The files ``git status`` lists as changed, added or untracked (none without git)."""
+    try:
+        status = subprocess.run(["git", "-C", str(repo_root), "status", "--porcelain"], capture_output=True,
+                                text=True, timeout=30, check=True).stdout
+    except (OSError, subprocess.SubprocessError):
+        return []
+    return [line[3:] for line in status.splitlines() if line.strip()]
 
 
 def tools_files(modules: list[str], tools_dir: Path) -> dict[str, str]:
@@ -788,6 +796,11 @@ def add_release_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentP
 
 
 def main_release(args: argparse.Namespace) -> int:
+    changed = changed_files(REPO_ROOT)
+    if changed:
+        print(f"grader release: warning: {len(changed)} file{'s' if len(changed) != 1 else ''} of the repository "
+              f"{'have' if len(changed) != 1 else 'has'} uncommitted changes (e.g. {changed[0]}): the release is made "
+              f"from the working tree, and its {MARKER} records it", file=sys.stderr)
     try:
         release = build_release(args.out)
     except ReleaseError as exc:

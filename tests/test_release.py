@@ -611,9 +611,30 @@ def test_release_command_replaces_an_earlier_release(release, tmp_path):
     assert result.returncode == 0, result.stdout + result.stderr
     assert "student edition:" in result.stdout and "none found" in result.stdout
     new = json.loads((out / "student" / MARKER).read_text())
+    # A release from a tree with uncommitted changes is written, with a warning.
+    warned = re.search(r"warning: \d+ files? of the repository ha(ve|s) uncommitted changes", result.stderr)
+    assert bool(warned) == new["uncommitted_changes"], result.stderr
     assert new["files"].keys() == old["files"].keys()
     assert not (out / "student" / ".venv").exists()
     assert sorted(p.name for p in out.iterdir()) == ["autograder", "student"]   # no staging folder left
+
+
+def test_changed_files_are_what_git_status_lists(tmp_path):
+    from grader.release import changed_files, repository_commit
+
+    def git(*args):
+        subprocess.run(["git", "-C", str(tmp_path), "-c", "user.name=t", "-c", "user.email=t@example.org", *args],
+                       check=True, capture_output=True)
+
+    git("init", "-q")
+    (tmp_path / "a.txt").write_text("one\n")
+    git("add", "a.txt")
+    git("commit", "-q", "-m", "one")
+    assert changed_files(tmp_path) == [] and repository_commit(tmp_path)[1] is False
+    (tmp_path / "a.txt").write_text("two\n")
+    (tmp_path / "b.txt").write_text("new\n")
+    assert changed_files(tmp_path) == ["a.txt", "b.txt"] and repository_commit(tmp_path)[1] is True
+    assert changed_files(tmp_path / "not-a-repository") == []
 
 
 # The README's set-up, in a fresh virtualenv (downloads packages) ----------------------------------------------

@@ -1,6 +1,7 @@
 """The ``grader`` command.
 
     grader check [EXERCISE] [--package PATH]      students: public tests of one exercise
+    grader update NEW_RELEASE [--dry-run]          students: take a corrected release, keeping their work
     grader grade SUBMISSIONS... --out DIR          instructors: a whole class
     grader gradescope-zip [--out FILE]             the same grading packaged for Gradescope
     grader example-class --out DIR                 write the bundled example class
@@ -23,6 +24,8 @@ SUBCOMMANDS = {
                       "write the bundled example class of submissions"),
     "similarity": ("grader.similarity", "add_similarity_arguments", "main_similarity", "flag nearly identical code"),
     "submit": ("grader.submit", "add_submit_arguments", "main_submit", "write the zip to hand in (with a manifest)"),
+    "update": ("grader.update", "add_update_arguments", "main_update",
+               "take a corrected release of the course into this folder, keeping your work"),
     "release": ("grader.release", "add_release_arguments", "main_release",
                 "write the student edition and the Gradescope autograder"),
 }

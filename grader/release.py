@@ -15,9 +15,15 @@ Instructors only (this module never ships to students).  It writes
     a README on grading locally or on Gradescope.
 
 Each folder is marked with ``.course-release.json`` (date, repository commit, the
-SHA-256 of every file written).  A folder that exists and is not an unchanged earlier
-release is never touched: the release refuses, says why and writes nothing.  An
-earlier release is replaced only once the new one is complete and checked.
+SHA-256 of every file written).  The student edition's marker also holds the release's
+version and what it changed (the newest section of the repository's ``CHANGELOG.md``,
+which the edition copies), and the edition keeps the original text of its text files in
+``.course-release-originals.zip``: the base of the 3-way merges of ``grader update``
+(:mod:`grader.update`), which takes a corrected release into a student's folder.
+
+A folder that exists and is not an unchanged earlier release is never touched: the
+release refuses, says why and writes nothing.  An earlier release is replaced only once
+the new one is complete and checked.
 
 Before anything is moved into place, :func:`verify_student` proves that the student
 folder reveals no solution: no ``solutions`` package, no hidden test, no reference
@@ -53,8 +59,7 @@ from .module_graph import imported_modules as third_party_imports
 GRADER_DIR = Path(__file__).resolve().parent
 REPO_ROOT = GRADER_DIR.parent
 TEMPLATES = GRADER_DIR / "release_files"
-MARKER = ".course-release.json"
-MARKER_FORMAT = "collision-course-release"
+from .update import CHANGELOG, MARKER, MARKER_FORMAT, parse_changelog, version_key, write_originals
 STUDENT_PROJECT = "collision-course-student"
 
 #: Where the student side of the grader starts; everything they import (and the files
@@ -64,7 +69,7 @@ STUDENT_ROOTS = ("__init__.py", "__main__.py", "cli.py", "check.py", "plugin.py"
 #: Folders shipped whole (the public graded tests and what sits beside them).
 STUDENT_FOLDERS = ("tests/public",)
 #: Subcommands of ``grader/cli.py`` the student edition keeps (when their module exists).
-STUDENT_COMMANDS = ("check", "submit")
+STUDENT_COMMANDS = ("check", "submit", "update")
 #: Never in the student edition: reaching one of these is an error, not a silent copy.
 NEVER_SHIP = ("grade.py", "gradebook.py", "scheduler.py", "isolation.py", "gradescope.py", "samples/",
               "similarity.py", "report.py", "release.py", "release_book.py", "release_files/", "tests/hidden/", "spec/", "checks/")
@@ -561,6 +566,7 @@ class Release:
     short_blocks: list[str] = field(default_factory=list)
     checked_blocks: int = 0
     seconds: float = 0.0
+    version: str | None = None   # from CHANGELOG.md's newest section (None without one)
 
     def sizes(self) -> dict[str, int]:
         def size(folder: Path) -> int:
@@ -634,9 +640,15 @@ def write_student(target: Path, repo_root: Path = REPO_ROOT) -> dict:
     if stale:
         warnings.append(stale)
     project = tomllib.loads((repo_root / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    version, changes = release_version(repo_root)
+    if version is None:
+        warnings.append(f"no {CHANGELOG} at the top of the repository: this release has no version, and "
+                        "`grader update` cannot tell students what changed")
+    else:
+        shutil.copy2(repo_root / CHANGELOG, target / CHANGELOG)
     packages = ["exercises*", "grader*"] + (["tools*"] if tools else [])
     values = {
-        "version": project.get("version", "0.0.0"),
+        "version": version or project.get("version", "0.0.0"),
         "requires_python": project.get("requires-python", ">=3.11"),
         "dependencies": "\n".join(f'    "{r}",' for r in requirements),
         "packages": ", ".join(f'"{p}"' for p in packages),
@@ -652,7 +664,30 @@ def write_student(target: Path, repo_root: Path = REPO_ROOT) -> dict:
     os.chmod(target / "run.sh", 0o755)
     shutil.copy2(TEMPLATES / "gitignore", target / ".gitignore")
     return {"grader_files": grader_files, "notebooks": book["notebooks"], "pages": book["pages"],
-            "tools": sorted(tools), "requirements": requirements, "added": added, "warnings": warnings}
+            "tools": sorted(tools), "requirements": requirements, "added": added, "warnings": warnings,
+            "version": version, "changes": changes}
+
+
+def release_version(repo_root: Path = REPO_ROOT) -> tuple[str | None, str | None]:
+    """(version, what changed) of the release: the newest section of the repository's
+    ``CHANGELOG.md`` (``## 1.0.1 (2025-03-02)``, newest first); (None, None) without
+    one.  ReleaseError for a changelog with no section or a newest section whose heading
+    is not a version (numbers and dots), or versions out of order."""
+    path = Path(repo_root) / CHANGELOG
+    if not path.is_file():
+        return None, None
+    sections = parse_changelog(path.read_text(encoding="utf-8"))
+    if not sections:
+        raise ReleaseError(f"{path} has no section '## VERSION' (numbers and dots, e.g. '## 1.0.1 (2025-03-02)'): "
+                           "write what this release changes under one, newest first")
+    keys = [version_key(v) for v, _ in sections]
+    if any(newer <= older for newer, older in zip(keys, keys[1:])):
+        raise ReleaseError(f"{path}: the versions of its sections ({', '.join(v for v, _ in sections)}) must go "
+                           "down from the top, the newest first")
+    version, changes = sections[0]
+    if not changes:
+        raise ReleaseError(f"{path}: the newest section, {version}, says nothing: write what changed")
+    return version, changes
 
 
 def verify_student(folder: Path, blocks: list[SolutionBlock]) -> None:
@@ -720,8 +755,11 @@ def build_release(out: str | os.PathLike, repo_root: Path = REPO_ROOT) -> Releas
     try:
         new_student, new_autograder = staging / "student", staging / "autograder"
         content = write_student(new_student, repo_root)
+        kept = write_originals(new_student)   # the base of `grader update`'s merges
         verify_student(new_student, blocks)
-        _marker(new_student, "student", created, commit, dirty, {"grader_files": list(content["grader_files"])})
+        _marker(new_student, "student", created, commit, dirty,
+                {"version": content["version"], "changes": content["changes"],
+                 "grader_files": list(content["grader_files"]), **kept})
         new_autograder.mkdir()
         zip_path = build_autograder_zip(out=new_autograder / "autograder.zip", repo_root=repo_root)
         zip_line = (f"`autograder.zip`: {zip_path.stat().st_size / 1024:.0f} KiB, sha256 "
@@ -756,7 +794,7 @@ def build_release(out: str | os.PathLike, repo_root: Path = REPO_ROOT) -> Releas
                    short_blocks=[f"{b.where} ({len(b.tokens)} tokens)" for b in blocks
                                  if len(b.tokens) < MIN_BLOCK_TOKENS],
                    checked_blocks=sum(len(b.tokens) >= MIN_BLOCK_TOKENS for b in blocks),
-                   seconds=time.perf_counter() - start)
+                   seconds=time.perf_counter() - start, version=content["version"])
 
 
 # Command line ------------------------------------------------------------------------------------------
@@ -768,7 +806,8 @@ def describe(release: Release) -> str:
     """What was written, for the shell."""
     sizes = release.sizes()
     student_files = len([p for p in _files(release.student)])
-    lines = [f"student edition: {release.student} ({student_files} files, {_size(sizes['student'])}: "
+    lines = [f"version: {release.version}" if release.version else "version: none (no CHANGELOG.md)",
+             f"student edition: {release.student} ({student_files} files, {_size(sizes['student'])}: "
              f"book {_size(sizes['student/book'])}, grader {_size(sizes['student/grader'])}, "
              f"exercises {_size(sizes['student/exercises'])})",
              f"  {len(release.notebooks)} chapter notebooks, reading pages {', '.join(release.pages)}"

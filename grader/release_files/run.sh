@@ -4,7 +4,9 @@
 #   bash run.sh check [EXERCISE]   run the public tests on your exercises/ package
 #   bash run.sh lab                open the chapters (book/) in JupyterLab
 #   bash run.sh submit [OPTIONS]   write the zip to hand in (--check runs the tests first)
+#   bash run.sh update NEW_RELEASE take a corrected release (folder or zip), keeping your work
 set -euo pipefail
+CALLED_FROM="$PWD"   # NEW_RELEASE of `update` is relative to where run.sh was called
 cd "$(dirname "$0")"
 VENV=.venv
 PY="$VENV/bin/python"
@@ -106,11 +108,26 @@ with zipfile.ZipFile("submission.zip", "w", zipfile.ZIP_DEFLATED) as archive:
 print("wrote submission.zip: hand it in as your instructor says")
 PYTHON
         ;;
+    update)
+        if [ $# -lt 1 ]; then
+            echo "usage: bash run.sh update NEW_RELEASE [--dry-run]: the folder (or zip) of the release your instructor handed out" >&2
+            exit 2
+        fi
+        release="$1"
+        shift
+        case "$release" in
+            /*|-*) ;;
+            *) release="$CALLED_FROM/$release" ;;
+        esac
+        setup
+        # exec: bash stops reading this file, which the update may replace.
+        exec "$VENV/bin/grader" update "$release" "$@"
+        ;;
     help|-h|--help)
-        sed -n '2,6p' "$0" | sed 's/^# \{0,1\}//'
+        sed -n '2,7p' "$0" | sed 's/^# \{0,1\}//'
         ;;
     *)
-        echo "unknown command '$command': use setup, check [EXERCISE], lab or submit" >&2
+        echo "unknown command '$command': use setup, check [EXERCISE], lab, submit or update NEW_RELEASE" >&2
         exit 2
         ;;
 esac

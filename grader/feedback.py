@@ -22,6 +22,13 @@ For each test shown: its title, status, points, what the test found (the message
 the speed and error figures), what the student's code printed, and the picture of a
 failing case.  Everything read from the results file is escaped; the page is
 self-contained (styles inline, pictures as base64 PNG, no JavaScript).
+
+Feedback never goes back: a page records what it releases in a tag
+``<meta name="course-feedback-level" content="after_due_date published">``, and a page
+written again keeps at least that (a rerun without ``--after-due-date`` does not take
+back the tests a student has seen) unless the instructor asks for less
+(``lower=True``, ``grader grade --lower-feedback-level``).  A page without the tag
+counts as showing the visible tests only.
 """
 from __future__ import annotations
 
@@ -29,11 +36,15 @@ import html
 import json
 import math
 import os
+import re
 from pathlib import Path
 
 from .results import STATUS_WORDS, format_metrics, output_text, picture_html, plain, write_text_atomic
 
 FEEDBACK_NAME = "feedback.html"
+#: The meta tag naming what a page releases beyond the visible tests (see the module docstring).
+LEVEL_META = "course-feedback-level"
+LEVELS = ("after_due_date", "published")
 STATUS_COLORS = {"passed": "#1a7f37", "failed": "#cf222e", "not_implemented": "#6e7781", "not_run": "#6e7781",
                  "forbidden": "#8250df"}
 
@@ -174,23 +185,47 @@ def feedback_html(data: dict, after_due_date: bool = False, published: bool = Fa
         body.append("<p class='muted'>No test results are shown yet.</p>")
     title = f"Feedback on {who}"
     return "\n".join(["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+                      level_tag(after_due_date, published),
                       f"<title>{_e(title)}</title>", f"<style>{STYLE}</style></head><body>", *body,
                       "</body></html>", ""])
 
 
+def level_tag(after_due_date: bool, published: bool) -> str:
+    """The meta tag recording what a page releases (read back by :func:`page_level`)."""
+    level = " ".join(name for name, on in zip(LEVELS, (after_due_date, published)) if on)
+    return f'<meta name="{LEVEL_META}" content="{level}">'
+
+
+def page_level(path: str | os.PathLike) -> set[str]:
+    """What the feedback page at ``path`` releases beyond the visible tests (a subset of
+    :data:`LEVELS`, read from its meta tag); empty when there is no page or no tag."""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as page:
+            head = page.read(4096)
+    except OSError:
+        return set()
+    match = re.search(rf'<meta name="{LEVEL_META}" content="([a-z_ ]*)">', head)
+    return set(match[1].split()) & set(LEVELS) if match else set()
+
+
 def write_feedback_report(results_json: str | os.PathLike, out_html: str | os.PathLike, after_due_date: bool = False,
-                          published: bool = False) -> Path:
+                          published: bool = False, lower: bool = False) -> Path:
     """Write the feedback page of ``results_json`` to ``out_html`` (atomically; folders
-    created) and return its path.  A missing or unreadable results file gives a page
-    that says so."""
+    created) and return its path.  A page already there keeps showing what it showed
+    (its level, see the module docstring) unless ``lower``.  A missing or unreadable
+    results file gives a page that says so."""
     out_html = Path(out_html)
+    if not lower:
+        kept = page_level(out_html)
+        after_due_date, published = after_due_date or "after_due_date" in kept, published or "published" in kept
     out_html.parent.mkdir(parents=True, exist_ok=True)
     try:
         data = json.loads(Path(results_json).read_text(encoding="utf-8"))
     except (OSError, ValueError):
         data = None
     if not isinstance(data, dict):
-        page = ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>Feedback</title></head>"
+        page = ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
+                f"{level_tag(after_due_date, published)}\n<title>Feedback</title></head>"
                 "<body><p>No results to show yet.</p></body></html>\n")
     else:
         page = feedback_html(data, after_due_date, published, None)

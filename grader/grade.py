@@ -107,7 +107,7 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                       per_test_seconds: float = DEFAULT_PER_TEST_SECONDS, progress: bool = True,
                       tests: list[TestSpec] | None = None, html: bool = True, after_due_date: bool = False,
                       published: bool = False, feedback_dir: str | os.PathLike | None = None,
-                      calibrate: bool = True) -> list[dict]:
+                      calibrate: bool = True, lower_feedback_level: bool = False) -> list[dict]:
     """Grade every submission at ``paths`` into ``out_dir``; skip what is already graded.
 
     ``calibrate=False`` keeps the time limits as given (else they are scaled by how
@@ -142,6 +142,9 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
     feedback_dir : path, optional
         Also write each feedback page to ``feedback_dir/<id>/feedback.html`` (even
         without ``html``).
+    lower_feedback_level : bool
+        Feedback pages written before may show less than they did; without it a page
+        keeps showing the tests it showed (a student never loses feedback they saw).
 
     Returns
     -------
@@ -173,7 +176,7 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
         if feedback_dir.exists() and not feedback_dir.is_dir():
             raise GradingError(f"--feedback-dir {feedback_dir} exists and is not a folder")
         feedback_dir = feedback_dir.resolve()
-    feedback = FeedbackOptions(html, feedback_dir, after_due_date, published)
+    feedback = FeedbackOptions(html, feedback_dir, after_due_date, published, lower_feedback_level)
     bar = _progress_bar(len(submissions), 0, progress)
     warn = bar.write
     rows: dict[str, dict] = {}
@@ -263,6 +266,11 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                 if html:
                     write_class_report(out_dir, warn)
                 shutil.rmtree(work, ignore_errors=True)
+                if feedback.kept:
+                    count = len(feedback.kept)
+                    warn(f"note: {count} feedback page{'s' if count != 1 else ''} (e.g. {feedback.kept[0]}) already "
+                         "showed more tests than asked for now and keep showing them; --lower-feedback-level "
+                         "to show less")
     finally:
         bar.close()
     return [rows[s.id] for s in submissions if s.id in rows]
@@ -310,6 +318,9 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
                              "and the total score")
     parser.add_argument("--feedback-dir", default=None, metavar="DIR",
                         help="also write each student's feedback page to DIR/<submission id>/feedback.html")
+    parser.add_argument("--lower-feedback-level", action="store_true",
+                        help="feedback pages may show fewer tests than they showed before (by default a page "
+                             "written with --after-due-date or --published keeps showing those tests)")
 
 
 def main_grade(args: argparse.Namespace) -> int:
@@ -330,7 +341,8 @@ def main_grade(args: argparse.Namespace) -> int:
                                  html=not args.no_html, tests=tests,
                                  after_due_date=getattr(args, "after_due_date", False),
                                  published=getattr(args, "published", False),
-                                 feedback_dir=getattr(args, "feedback_dir", None))
+                                 feedback_dir=getattr(args, "feedback_dir", None),
+                                 lower_feedback_level=getattr(args, "lower_feedback_level", False))
     except (SubmissionPathError, GradingError, SpecError) as exc:
         print(f"grader grade: error: {exc}", file=sys.stderr)
         return 2

@@ -78,13 +78,17 @@ class FeedbackOptions:
 
     ``html``: write ``feedback.html`` beside each results.json; ``folder``: also write
     ``folder/<id>/feedback.html``; ``after_due_date`` and ``published``: show those
-    tests (see :mod:`grader.feedback`).
+    tests (see :mod:`grader.feedback`); ``lower``: a page written before may show less
+    than it did (else it keeps its level).  ``kept`` collects the ids whose page kept
+    a higher level than asked for.
     """
 
     html: bool = True
     folder: Path | None = None
     after_due_date: bool = False
     published: bool = False
+    lower: bool = False
+    kept: list = dataclasses.field(default_factory=list, compare=False)
 
     @property
     def wanted(self) -> bool:
@@ -97,15 +101,19 @@ def write_feedback(results_path: Path, submission_id: str, options: FeedbackOpti
     if not options.wanted:
         return
     try:
-        from .feedback import write_feedback_report
+        from .feedback import page_level, write_feedback_report
 
         targets = []
         if options.html:
             targets.append(results_path.parent / FEEDBACK_NAME)
         if options.folder is not None:
             targets.append(options.folder / submission_id / FEEDBACK_NAME)
+        asked = {name for name, on in (("after_due_date", options.after_due_date), ("published", options.published))
+                 if on}
+        if not options.lower and any(page_level(target) - asked for target in targets):
+            options.kept.append(submission_id)
         for target in targets:
-            write_feedback_report(results_path, target, options.after_due_date, options.published)
+            write_feedback_report(results_path, target, options.after_due_date, options.published, options.lower)
     except Exception as exc:  # feedback must not cost a grade
         warn(f"warning: no feedback page for {submission_id}: {type(exc).__name__}: {exc}")
 

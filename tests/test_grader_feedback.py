@@ -12,14 +12,14 @@ import io
 import json
 import re
 import shutil
-from contextlib import redirect_stdout
+from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
 
 from grader import results as gs_results
 from grader.cli import main as cli_main
 from grader.spec import load_spec
-from grader.feedback import FEEDBACK_NAME, feedback_html, is_shown, write_feedback_report
+from grader.feedback import FEEDBACK_NAME, feedback_html, is_shown, page_level, write_feedback_report
 from grader.outcome import Outcome
 from grader.plugin import TestResult as Result
 from grader.report import write_student_report
@@ -107,8 +107,25 @@ def test_once_published_the_total_shows_and_hidden_tests_still_do_not(tmp_path):
     assert "sat time (s)" not in text
     # Gradescope's total after publication counts the hidden test (4 points passed) and says so.
     assert "Score: 6 / 12 points" in text and "also counts tests that are not shown" in text
-    published_only = page(tmp_path, published=True)
+    published_only = page(tmp_path / "fresh", published=True)
     assert AFTER_PUBLISHED[0] in published_only and AFTER_DUE[0] not in published_only
+
+
+def test_a_page_keeps_showing_what_it_showed_unless_asked_for_less(tmp_path):
+    target = tmp_path / "ada" / FEEDBACK_NAME
+    assert page(tmp_path, after_due_date=True) and page_level(target) == {"after_due_date"}
+    again = page(tmp_path)  # a later run that forgot --after-due-date
+    assert AFTER_DUE[1] in again and AFTER_PUBLISHED[1] not in again and page_level(target) == {"after_due_date"}
+    published = page(tmp_path, published=True)
+    assert AFTER_DUE[1] in published and AFTER_PUBLISHED[1] in published
+    assert page_level(target) == {"after_due_date", "published"}
+    assert AFTER_PUBLISHED[1] in page(tmp_path) and HIDDEN[1] not in page(tmp_path)
+    lowered = page(tmp_path, lower=True)
+    assert AFTER_DUE[1] not in lowered and AFTER_PUBLISHED[1] not in lowered and page_level(target) == set()
+    # A page without the tag (or no page) releases the visible tests only.
+    target.write_text("<html><body>an old page</body></html>")
+    assert page_level(target) == set() and page_level(tmp_path / "none.html") == set()
+    assert AFTER_DUE[1] not in page(tmp_path)
 
 
 def test_every_shown_test_has_status_points_message_output_and_picture(tmp_path):
@@ -215,3 +232,14 @@ def test_grade_writes_feedback_pages_and_a_feedback_folder(tmp_path):
     with redirect_stdout(io.StringIO()):
         assert cli_main(arguments + ["--after-due-date"]) == 0
     assert title in (feedback / "bob" / FEEDBACK_NAME).read_text()
+
+    # Released feedback never goes back: a later run without --after-due-date keeps the test
+    # shown (and says so), unless the instructor asks for less.
+    with redirect_stdout(io.StringIO()), redirect_stderr(io.StringIO()) as said:
+        assert cli_main(arguments) == 0
+    for page_path in (feedback / "bob" / FEEDBACK_NAME, out / "bob" / FEEDBACK_NAME):
+        assert title in page_path.read_text() and f"Score: 0 / {total:g} points" in page_path.read_text()
+    assert "already showed more tests" in said.getvalue() and "--lower-feedback-level" in said.getvalue()
+    with redirect_stdout(io.StringIO()), redirect_stderr(io.StringIO()):
+        assert cli_main(arguments + ["--lower-feedback-level"]) == 0
+    assert title not in (feedback / "bob" / FEEDBACK_NAME).read_text()

@@ -295,3 +295,43 @@ def load_ipython_extension(ipython) -> None:
 
 def unload_ipython_extension(ipython) -> None:  # nothing to undo beyond the magic
     ipython.magics_manager.magics["cell"].pop("reference_fallback", None)
+
+
+# The kernel ------------------------------------------------------------------------------------
+#: What the course's kernel adds to ``ipykernel install``'s: no debugger warning about
+#: frozen modules, kernel logs at ERROR (ipykernel warns on every start that local TCP
+#: is unencrypted), as the instructor's kernel (tools/book.py) does.
+QUIET_PYTHON_FLAGS = ["-Xfrozen_modules=off"]
+QUIET_KERNEL_FLAGS = ["--log-level=ERROR"]
+QUIET_KERNEL_ENV = {"PYDEVD_DISABLE_FILE_VALIDATION": "1"}
+
+
+def quiet_kernel_spec(spec: dict) -> dict:
+    """The kernel.json ``spec`` (of ``python -m ipykernel install``) made quiet on start."""
+    spec = dict(spec)
+    argv = list(spec["argv"])
+    argv[1:1] = [flag for flag in QUIET_PYTHON_FLAGS if flag not in argv]
+    argv += [flag for flag in QUIET_KERNEL_FLAGS if flag not in argv]
+    spec["argv"] = argv
+    spec["env"] = {**spec.get("env", {}), **QUIET_KERNEL_ENV}
+    return spec
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m grader.notebook quiet-kernel KERNEL_JSON``: rewrite that kernel.json."""
+    args = sys.argv[1:] if argv is None else argv
+    if len(args) != 2 or args[0] != "quiet-kernel":
+        print("usage: python -m grader.notebook quiet-kernel PATH/kernel.json", file=sys.stderr)
+        return 2
+    path = Path(args[1])
+    try:
+        spec = json.loads(path.read_text(encoding="utf-8"))
+        path.write_text(json.dumps(quiet_kernel_spec(spec), indent=1) + "\n", encoding="utf-8")
+    except (OSError, ValueError, KeyError) as exc:
+        print(f"grader.notebook: cannot rewrite {path}: {exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -668,6 +668,16 @@ def test_student_setup_in_fresh_venv(release, tmp_path):
                              capture_output=True, text=True, check=True)
     spec = json.loads(kernels.stdout)["kernelspecs"]["collision-course"]
     assert Path(spec["resource_dir"]).resolve().is_relative_to(student / ".venv")
+    assert "--log-level=ERROR" in spec["spec"]["argv"], spec   # no TCP warning on every kernel start
+    # The chapters open trusted in JupyterLab: setup signed them for this user.
+    trusted = subprocess.run([str(python), "-c", "import glob, nbformat\nfrom nbformat.sign import NotebookNotary\n"
+                              "print(sorted(p for p in glob.glob('book/*.ipynb')\n"
+                              "             if not NotebookNotary().check_signature(nbformat.read(p, 4))))"],
+                             cwd=student, env=env, capture_output=True, text=True, check=True)
+    assert trusted.stdout.strip() == "[]", trusted.stdout
+    venv_mib, folder_mib = (subprocess.run(["du", "-sm", *args], cwd=student, capture_output=True, text=True,
+                                           check=True).stdout.split()[0] for args in ([".venv"], ["--exclude=.venv", "."]))
+    print(f"student venv {venv_mib} MiB, student folder without it {folder_mib} MiB")
     lab = subprocess.run([str(student / ".venv/bin/jupyter"), "lab", "--version"], env=env, capture_output=True,
                          text=True, check=True)
     assert lab.stdout.startswith("4."), lab.stdout

@@ -58,7 +58,10 @@ setup() {
         # pip's and setuptools' chatter goes to a log, shown only when the install fails.
         if ! { "$PY" -m pip install --quiet --disable-pip-version-check --upgrade pip &&
                "$PY" -m pip install --quiet --disable-pip-version-check -e . &&
-               "$PY" -m ipykernel install --sys-prefix --name "$KERNEL" --display-name "$KERNEL_DISPLAY_NAME"
+               "$PY" -m ipykernel install --sys-prefix --name "$KERNEL" --display-name "$KERNEL_DISPLAY_NAME" &&
+               "$PY" -m grader.notebook quiet-kernel "$VENV/share/jupyter/kernels/$KERNEL/kernel.json" &&
+               # The chapters' stored outputs (the reference engine's) shown as trusted in JupyterLab.
+               "$VENV/bin/jupyter" trust book/*.ipynb
              } >"$VENV/pip.log" 2>&1; then
             cat "$VENV/pip.log" >&2
             echo "run.sh: installing the course's packages failed (log above, also in $VENV/pip.log)" >&2

@@ -339,7 +339,8 @@ def test_import_solutions_fails_in_the_student_folder(release):
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stderr
     commands = re.search(r"\{([\w,-]+)\}", result.stdout).group(1).split(",")
-    assert set(commands) <= {"check", "submit", "list"} and "check" in commands, result.stdout
+    assert set(commands) <= {"check", "submit", "update", "list"} and {"check", "update"} <= set(commands), \
+        result.stdout
 
 
 def test_the_student_edition_names_the_commands_its_readme_teaches(release):

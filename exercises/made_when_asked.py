@@ -2,7 +2,7 @@
 # Handed out with the course; generated from solutions/made_when_asked.py on the instructor's side.
 """An attribute that can be given a recipe instead of a value.
 
-The compiled soft step (:mod:`~solutions.response.soft_step_numba`) leaves its results
+The compiled soft step (``response/soft_step_numba.py`` of the instructor's edition) leaves its results
 in arrays; making Python objects of them (contacts, figures) would cost more than the
 step.  So it sets such attributes to a function of no arguments, and the first read
 calls it and keeps what it returns.  Any other value is stored and read as usual.

@@ -37,7 +37,7 @@ Both solvers prepare their contacts with the same prestep
 (:class:`~exercises.response.contact_preparation.ContactPreparation`), and every pass
 of either is the same solver kernel (:mod:`exercises.solver.kernel`) with other
 targets, mass scales and impulse scales.  ``backend="numba"`` runs the soft step of a
-world of boxes or of discs compiled whole (:mod:`~solutions.response.soft_step_numba`).
+world of boxes or of discs compiled whole (``response/soft_step_numba.py`` of the instructor's edition).
 
 Every technique is a switch of :class:`WorldSettings`, of the solvers'
 :class:`~exercises.response.solver_settings.SolverSettings` or of the soft step's
@@ -133,9 +133,9 @@ class WorldSettings:
     backend : str
         ``"python"``: every stage in readable Python and numpy (the teaching text);
         ``"numba"``: the compiled twins of the solver kernel (contacts and joints,
-        :mod:`solutions.solver.kernel_numba`), of the numpy grid broad phase
-        (:mod:`solutions.broadphase.grid_numba`) and of the box-pair manifolds of the
-        soft step (:mod:`solutions.narrowphase.box_pairs_numba`), each tested equal to
+        ``solver/kernel_numba.py`` of the instructor's edition), of the numpy grid broad phase
+        (``broadphase/grid_numba.py`` of the instructor's edition) and of the box-pair manifolds of the
+        soft step (``narrowphase/box_pairs_numba.py`` of the instructor's edition), each tested equal to
         its readable version, and the world to 1e-12 on every hard scene.  Not a
         setting of the physics: both give the same motion, to rounding.
     """
@@ -214,7 +214,7 @@ class World:
                                         self.settings.solver.warm_starting, backend)
         self.time = 0.0
         self.manifolds = []
-        #: The soft step compiled whole (:mod:`~solutions.response.soft_step_numba`), for a
+        #: The soft step compiled whole (``response/soft_step_numba.py`` of the instructor's edition), for a
         #: world of boxes or of discs with ``backend="numba"``; None where the readable stages run.
         self.compiled_soft_step = None
         if self.settings.backend == "numba" and self.settings.soft_step:
@@ -266,7 +266,7 @@ class World:
 
     def compiled_step(self, h: float) -> None:
         """The soft step (:meth:`step` with ``soft_step``) as one compiled function
-        (:mod:`~solutions.response.soft_step_numba`)."""
+        (``response/soft_step_numba.py`` of the instructor's edition)."""
         settings = self.settings
         self.compiled_soft_step.step(self.state, h, settings)
         for _ in range(settings.substeps):
@@ -390,7 +390,7 @@ class World:
         # switches from rigid to spring where a separation crosses 0, so a rounding
         # difference of 1e-16 m at an exactly touching contact (a box resting on a slope)
         # changes the motion by up to 1e-6 m/s, and the compiled step
-        # (:mod:`~solutions.response.soft_step_numba`) follows the numpy arithmetic exactly.
+        # (``response/soft_step_numba.py`` of the instructor's edition) follows the numpy arithmetic exactly.
         # The student edition has no batch twin and takes the loop below.
         boxes = [k for k, (i, j) in enumerate(pairs) if isinstance(shapes[i], (AABB, OBB))
                  and isinstance(shapes[j], (AABB, OBB))] if HAS_TWINS else []

@@ -101,6 +101,9 @@ DOCTEST_IMPORT = re.compile(rf"^(\s*(?:>>>|\.\.\.)\s+(?:from|import)\s+){SOURCE_
 # Cross-references in docstrings (``:mod:`solutions.shapes```, ``solutions.world.World``)
 # name a dotted path in the package, or the package itself as a role's target.
 CROSS_REFERENCE = re.compile(rf"(?<![\w/.]){SOURCE_PACKAGE}((?:\.[A-Za-z_]\w*)+)|(?<=:`){SOURCE_PACKAGE}(?=`)")
+# The same, whole: a role (``:mod:`~solutions.x```) or a literal (````solutions.x````).
+WRAPPED_REFERENCE = re.compile(rf":[\w:-]+:`~?({SOURCE_PACKAGE}(?:\.[A-Za-z_]\w*)+)`"
+                               rf"|``({SOURCE_PACKAGE}(?:\.[A-Za-z_]\w*)+)``")
 
 
 class GeneratorError(ValueError):
@@ -286,24 +289,42 @@ def point_references_at_the_student_package(text: str, modules: dict[str, bool])
     """``text`` with every cross-reference into a module the student edition holds
     renamed into the student package.  ``modules`` maps each reference module's dotted
     name to whether it is handed out; a reference names the longest module that is a
-    prefix of it.  References to the instructor's own modules (the compiled twins)
-    keep their name, and prose is left alone.
+    prefix of it.  A reference to one of the instructor's own modules (the compiled
+    twins), which the student does not have, becomes its file, said to be the
+    instructor's; prose is left alone.
 
     >>> point_references_at_the_student_package(
     ...     "see :func:`~solutions.shapes.polygon_vertices`, :mod:`solutions` and "
     ...     ":mod:`solutions.response.twin`; the solutions of the LCP; solutions/shapes.py",
     ...     {"solutions": True, "solutions.shapes": True, "solutions.response": True,
     ...      "solutions.response.twin": False})
-    'see :func:`~exercises.shapes.polygon_vertices`, :mod:`exercises` and :mod:`solutions.response.twin`; the solutions of the LCP; solutions/shapes.py'
+    "see :func:`~exercises.shapes.polygon_vertices`, :mod:`exercises` and ``response/twin.py`` of the \
+instructor's edition; the solutions of the LCP; solutions/shapes.py"
     """
-    def renamed(match: re.Match) -> str:
-        parts = [SOURCE_PACKAGE, *(match.group(1) or "").split(".")[1:]]
-        named = next(".".join(parts[:k]) for k in range(len(parts), 0, -1) if ".".join(parts[:k]) in modules
-                     or k == 1)
-        held = modules.get(named, True)
-        return TARGET_PACKAGE + match.group(0)[len(SOURCE_PACKAGE):] if held else match.group(0)
+    def module_of(dotted: str) -> str:
+        parts = dotted.split(".")
+        return next(".".join(parts[:k]) for k in range(len(parts), 0, -1) if ".".join(parts[:k]) in modules
+                    or k == 1)
 
-    return CROSS_REFERENCE.sub(renamed, text)
+    def instructors(dotted: str, wrapped: bool) -> str:
+        module = module_of(dotted)
+        path = "/".join(module.split(".")[1:]) + ".py"
+        inside = dotted[len(module) + 1:]
+        quote = "``" if wrapped else ""
+        return (f"{quote}{path}{quote}" + (f" (``{inside}``)" if inside else "")
+                + " of the instructor's edition")
+
+    def unwrapped(match: re.Match) -> str:
+        dotted = match.group(1) or match.group(2)
+        return match.group(0) if modules.get(module_of(dotted), True) else instructors(dotted, True)
+
+    def renamed(match: re.Match) -> str:
+        dotted = SOURCE_PACKAGE + (match.group(1) or "")
+        if modules.get(module_of(dotted), True):
+            return TARGET_PACKAGE + match.group(0)[len(SOURCE_PACKAGE):]
+        return instructors(dotted, False)
+
+    return CROSS_REFERENCE.sub(renamed, WRAPPED_REFERENCE.sub(unwrapped, text))
 
 
 def generate(source_dir: Path, exercises: dict | None = None) -> tuple[dict[str, str], list[StubbedFunction]]:

@@ -110,7 +110,7 @@ class ContactPreparation:
     backend : str
         Which twin of the solver kernel runs the sweeps: ``"python"``, the readable
         loop of :mod:`exercises.solver.kernel` (the teaching version), or ``"numba"``,
-        the same loop compiled (:mod:`solutions.solver.kernel_numba`, tested equal to
+        the same loop compiled (``solver/kernel_numba.py`` of the instructor's edition, tested equal to
         1e-12; numba is imported only when asked for).  Not a setting of the physics:
         both give the same motion.
 

@@ -33,7 +33,7 @@ as one 2x2 complementarity problem (:func:`block_normal_impulses`).  With
 instead of the total) each increment is clamped, and each point's friction follows
 its own normal, bounded by that sweep's normal increment.
 
-:mod:`solutions.solver.kernel_numba` is the same loop compiled by numba; the two agree
+``solver/kernel_numba.py`` of the instructor's edition is the same loop compiled by numba; the two agree
 to rounding (tested to 1e-12).  SI units.
 """
 from __future__ import annotations
@@ -235,7 +235,7 @@ def solve_constraints(velocity: np.ndarray, rows: ConstraintRows, iterations: in
 
 def kernel(backend: str = "python"):
     """:func:`solve_constraints` of the readable loop (``"python"``) or of its compiled
-    twin (``"numba"``, :mod:`solutions.solver.kernel_numba`, imported only then)."""
+    twin (``"numba"``, ``solver/kernel_numba.py`` of the instructor's edition, imported only then)."""
     if backend == "python":
         return solve_constraints
     if backend == "numba":

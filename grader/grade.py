@@ -44,12 +44,15 @@ from .results import RESULTS_NAME, read_results, refused_results, write_results
 from .sandbox import Limits
 from .scheduler import Job, Worker, dismiss, run_jobs, run_order
 from .spec import TestSpec, load_spec
-from .submissions import SubmissionPathError, SubmissionRefused, discover, fingerprint
+from .submissions import SubmissionPathError, SubmissionRefused, discover, fingerprint, library_hash
 
 WORK_NAME = ".work"  # scratch folder of a run inside the output folder, removed after
 LOCK_NAME = ".grader.lock"
 DEFAULT_PER_TEST_SECONDS = 30.0
 DEFAULT_PER_SUBMISSION_SECONDS = 60.0
+#: The course's exercises package (stubs and library files, as students get them; never the
+#: solutions): the library files every submission is graded with.
+COURSE_LIBRARY = Path(__file__).resolve().parent.parent / "exercises"
 
 
 class _PlainProgress:
@@ -107,11 +110,18 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                       per_test_seconds: float = DEFAULT_PER_TEST_SECONDS, progress: bool = True,
                       tests: list[TestSpec] | None = None, html: bool = True, after_due_date: bool = False,
                       published: bool = False, feedback_dir: str | os.PathLike | None = None,
-                      calibrate: bool = True, lower_feedback_level: bool = False) -> list[dict]:
+                      calibrate: bool = True, library: str | os.PathLike | None = COURSE_LIBRARY,
+                      lower_feedback_level: bool = False) -> list[dict]:
     """Grade every submission at ``paths`` into ``out_dir``; skip what is already graded.
 
     ``calibrate=False`` keeps the time limits as given (else they are scaled by how
     loaded the machine is, :mod:`grader.calibration`).
+
+    The library files of each submission's package are graded as the course released
+    them: those of ``library`` (the course's ``exercises`` package, which students were
+    given; :func:`grader.submissions.with_course_library`), and the results say which of
+    the submission's differed.  Only the exercise files (and files the student added)
+    come from the submission.  ``library=None`` grades the submission as it is.
 
     Parameters
     ----------
@@ -179,6 +189,11 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
     feedback = FeedbackOptions(html, feedback_dir, after_due_date, published, lower_feedback_level)
     bar = _progress_bar(len(submissions), 0, progress)
     warn = bar.write
+    if library is not None and not Path(library).is_dir():
+        warn(f"warning: no course exercises package at {library}: each submission's library files are graded "
+             "as they were handed in")
+        library = None
+    library_digest = library_hash(library)
     rows: dict[str, dict] = {}
     workers: list[Worker] = []
     try:
@@ -214,7 +229,7 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                     previous = read_results(results_path)
                     meta = (previous or {}).get("extra_data") or {}
                     if (not regrade and previous is not None and meta.get("fingerprint") == submission_fingerprint
-                            and meta.get("spec_hash") == digest):
+                            and meta.get("spec_hash") == digest and meta.get("library") == library_digest):
                         rows[submission.id] = row_of(submission, "skipped", previous, out_dir)
                         if html and not (results_path.parent / REPORT_NAME).exists():
                             write_student_report(results_path, warn)
@@ -223,6 +238,7 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                         continue
                     if refusal is not None:
                         data = refused_results(tests, refusal, 0.0, submission.id, submission_fingerprint, digest)
+                        data["extra_data"]["library"] = library_digest
                         write_results(data, results_path)
                         log_graded(out_dir, submission.id, "refused", data)
                         if html:
@@ -236,8 +252,10 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                 dismiss(spare)
                 if todo:
                     chosen = resolve_isolation(isolation, warn)
+                    for job in todo:
+                        job.library = library_digest
                     config = {"tests": [dataclasses.asdict(t) for t in tests], "limits": dataclasses.asdict(limits),
-                              "isolation": chosen}
+                              "isolation": chosen, "library": None if library is None else str(Path(library).resolve())}
                     for worker in workers:
                         worker.configure(config)
 

@@ -38,7 +38,7 @@ from .results import (RESULTS_NAME, build_results, read_results, refused_results
                       write_text_atomic)
 from .scheduler import Job
 from .spec import TestSpec, load_spec
-from .submissions import Submission
+from .submissions import Submission, library_note
 
 GRADEBOOK_NAME = "gradebook.csv"
 LOG_NAME = "grading_log.jsonl"
@@ -147,6 +147,10 @@ def finish_job(job: Job, elapsed: float, tests: list[TestSpec], digest: str, out
             results.append(TestResult(test, outcome, seconds))
         data = build_results(results, elapsed, submission.id, job.fingerprint, digest, job.package)
         state = "graded"
+        if job.library_replaced:
+            data["output"] += "\n" + library_note(job.library_replaced)
+            data["extra_data"]["library_replaced"] = list(job.library_replaced)
+    data["extra_data"]["library"] = job.library
     write_results(data, results_path)
     log_graded(out_dir, submission.id, state, data)
     if html:

@@ -57,8 +57,9 @@ ROOT_VARIABLE = "AUTOGRADER_ROOT"
 PYTHON_VARIABLE = "AUTOGRADER_PYTHON"
 #: Packages of the ``dev`` extras that the grader needs at run time.
 GRADER_EXTRAS = ("hypothesis", "tqdm")
-#: Folders of the repository that go into the archive, whole (less caches).
-BUNDLED_FOLDERS = ("grader", "solutions")
+#: Folders of the repository that go into the archive, whole (less caches).  ``exercises``:
+#: the library files every submission is graded with (grader.grade.COURSE_LIBRARY).
+BUNDLED_FOLDERS = ("grader", "solutions", "exercises")
 BUNDLED_FILES = ("pyproject.toml",)
 FIXED_TIME = (2020, 1, 1, 0, 0, 0)  # every member's date: the same sources, the same archive
 

@@ -43,7 +43,7 @@ from .errors import GradingError
 from .outcome import Outcome
 from .sandbox import Limits
 from .spec import TestSpec
-from .submissions import Submission, SubmissionRefused, find_package, opened
+from .submissions import Submission, SubmissionRefused, find_package, opened, with_course_library
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 #: Times a submission may lose its worker process before its remaining tests are given up.
@@ -100,10 +100,13 @@ def worker_main() -> int:
         indices = list(job["tests"])
         submission = Submission(job["id"], Path(job["path"]), job["kind"])
         try:
-            with opened(submission, workdir=config["tmp"]) as folder:
+            with opened(submission, workdir=config["tmp"]) as folder, contextlib.ExitStack() as stack:
                 package = find_package(folder)
                 where = package.relative_to(folder).as_posix() if package != folder else "."
-                send({"event": "started", "job": number, "package": where})
+                # Graded with the course's library files; the exercise files are the submission's.
+                package, replaced = stack.enter_context(with_course_library(package, config.get("library"),
+                                                                            config["tmp"]))
+                send({"event": "started", "job": number, "package": where, "library_replaced": replaced})
                 # pytest runs the tests in its own order (module paths sorted: hidden/ before
                 # public/), not the spec's: each result finds its index by the test's name.
                 index_of = {tests[i].name: i for i in indices}
@@ -265,6 +268,8 @@ class Job:
     used: float = 0.0  # seconds of earlier attempts
     deaths: int = 0
     package: str | None = None
+    library: str | None = None   # hash of the course's library files graded with (submissions.library_hash)
+    library_replaced: list[str] = field(default_factory=list)   # the submission's that differed
     refused: str | None = None
     error: str | None = None
 
@@ -377,6 +382,7 @@ def _handle_event(worker: Worker, event: dict, per_test_seconds: float,
     now = time.monotonic()
     if kind == "started":
         job.package = event.get("package")
+        job.library_replaced = [str(name) for name in event.get("library_replaced") or []]
         worker.deadline = now + per_test_seconds
     elif kind == "test":
         index = int(event["index"])

@@ -681,3 +681,80 @@ def opened(submission: Submission, workdir: str | os.PathLike | None = None,
         yield folder
     finally:
         shutil.rmtree(folder, ignore_errors=True)
+
+
+# The course's library files -------------------------------------------------------------------
+#: The first words of a library file of the ``exercises`` package (the header
+#: tools/generate_exercises.py writes: ``LIBRARY_HEADER``); an exercise file starts with
+#: "# Exercise file".  A file is classed by the course's copy, never the submission's.
+LIBRARY_HEADER = "# Library file of the collision course"
+
+
+def library_files(reference: str | os.PathLike) -> dict[str, Path]:
+    """The library files of the course's ``exercises`` package at ``reference`` (what
+    students were given): {path relative to the package: file}."""
+    reference = Path(reference)
+    found = {}
+    for path in sorted(reference.rglob("*.py")):
+        relative = path.relative_to(reference)
+        if "__pycache__" in relative.parts or path.is_symlink():
+            continue
+        with open(path, encoding="utf-8", errors="replace") as handle:
+            if handle.readline().startswith(LIBRARY_HEADER):
+                found[relative.as_posix()] = path
+    return found
+
+
+def library_hash(reference: str | os.PathLike | None) -> str | None:
+    """sha256 of the course's library files (paths and bytes), None without them: a
+    submission graded with other library files is graded again."""
+    if reference is None or not Path(reference).is_dir():
+        return None
+    digest = hashlib.sha256()
+    for relative, path in library_files(reference).items():
+        digest.update(relative.encode() + b"\0" + hashlib.sha256(path.read_bytes()).digest())
+    return digest.hexdigest()
+
+
+@contextmanager
+def with_course_library(package: Path, reference: str | os.PathLike | None,
+                        workdir: str | os.PathLike | None = None) -> Iterator[tuple[Path, list[str]]]:
+    """The submission's package as graded: a temporary copy whose library files are the
+    course's (from ``reference``, the course's ``exercises`` package), with the library
+    files of the submission that differed or were missing ([relative paths]).  The
+    exercise files and any file the student added come from the submission.  Without a
+    ``reference`` folder, the package itself and [].
+
+    The copy holds regular files only (the submission was scanned: it has no link), and
+    nothing of the reference but its library files, which students have too."""
+    if reference is None or not Path(reference).is_dir():
+        yield package, []
+        return
+    library = library_files(reference)
+    scratch = Path(tempfile.mkdtemp(prefix="graded-", dir=workdir))
+    try:
+        graded = scratch / "exercises"
+        shutil.copytree(package, graded, symlinks=True, ignore=shutil.ignore_patterns(*IGNORED_NAMES, "*.pyc"))
+        replaced = []
+        for relative, source in library.items():
+            target = graded / relative
+            data = source.read_bytes()
+            if target.is_symlink() or not target.is_file() or _file_digest(target) != hashlib.sha256(data).hexdigest():
+                replaced.append(relative)
+                if target.is_symlink() or target.is_dir():
+                    raise SubmissionRefused(f"exercises/{_shown(relative)} is not a regular file; it must be the "
+                                            "course's library file")
+                target.parent.mkdir(parents=True, exist_ok=True)
+                target.write_bytes(data)
+        yield graded, replaced
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def library_note(replaced: list[str]) -> str:
+    """The line of the results a student sees when library files were replaced."""
+    shown = ", ".join(f"exercises/{name}" for name in replaced[:12]) + (", ..." if len(replaced) > 12 else "")
+    return (f"Library files of your submission that differ from the course's (or are missing) were graded as "
+            f"the course released them: {shown}. Library files are the course's: put your code in the exercise "
+            "files (the first line of each file says which it is); `bash run.sh update` takes a corrected "
+            "release of the course into your folder.")

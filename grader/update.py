@@ -99,7 +99,7 @@ def parse_changelog(text: str) -> list[tuple[str, str]]:
     below the heading, stripped)].  Headings that name no version (``## Unreleased``)
     end the section above them and are left out.
 
-    >>> parse_changelog("# Changelog\\n## Unreleased\\n- soon\\n## [1.0.1] - 2025-03-02\\n- Fixed x.\\n## 1.0\\nFirst.\\n")
+    >>> parse_changelog("# Log\\n## Unreleased\\n- soon\\n## [1.0.1] - 2025-03-02\\n- Fixed x.\\n## 1.0\\nFirst.")
     [('1.0.1', '- Fixed x.'), ('1.0', 'First.')]
     """
     sections: list[tuple[str, list[str]]] = []

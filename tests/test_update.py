@@ -288,3 +288,82 @@ def test_merge_text_puts_both_sides_of_a_conflict_between_markers():
     text, conflicts = merge_text(base, "a\nmine\nc\nd", "a\ntheirs\nc\nd\n", "release 2")
     assert conflicts == 1
     assert text == "a\n<<<<<<< yours\nmine\n=======\ntheirs\n>>>>>>> release 2\nc\nd\n"
+
+
+# Grading with the course's library files -----------------------------------------------------------
+def test_grading_uses_the_courses_library_files_and_says_which_differed(tmp_path):
+    """A submission whose library file is broken is graded with the course's (and told
+    so); its exercise file and its own files are its own; without the course's library
+    the same submission fails, so the course's files are what made it pass."""
+    from grader.grade import grade_submissions
+    from grader.spec import load_spec
+
+    repo = Path(__file__).resolve().parent.parent
+    tests = [t for t in load_spec() if t.exercise == "momentum"]
+
+    def submission(name: str, tamper: bool) -> Path:
+        package = tmp_path / "class" / name / "exercises"
+        shutil.copytree(repo / "exercises", package, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+        shutil.copy(repo / "solutions" / "response" / "momentum_1d.py", package / "response" / "momentum_1d.py")
+        (package / "my_notes.py").write_text("NOTE = 'mine'\n", encoding="utf-8")
+        if tamper:
+            (package / "response" / "__init__.py").write_text('raise RuntimeError("my own library")\n')
+        return package.parent
+
+    honest, tampered = submission("honest", False), submission("tampered", True)
+    rows = {r["id"]: r for r in grade_submissions([honest, tampered], tmp_path / "out", jobs=1, progress=False,
+                                                  tests=tests, html=False, calibrate=False)}
+    full = sum(t.points for t in tests)
+    assert rows["honest"]["score"] == rows["tampered"]["score"] == full, rows
+    said = rows["tampered"]["results"]["output"]
+    assert "exercises/response/__init__.py" in said and "graded as the course released" in said
+    assert rows["tampered"]["results"]["extra_data"]["library_replaced"] == ["response/__init__.py"]
+    assert "library" not in rows["honest"]["results"]["output"].lower()
+    assert "library_replaced" not in rows["honest"]["results"]["extra_data"]
+    assert (tampered / "exercises" / "response" / "__init__.py").read_text().startswith("raise")  # not touched
+
+    as_handed_in = grade_submissions([tampered], tmp_path / "plain", jobs=1, progress=False, tests=tests,
+                                     html=False, calibrate=False, library=None)
+    assert as_handed_in[0]["score"] == 0
+
+
+def test_the_graded_copy_holds_the_submissions_exercises_and_the_courses_library_only(tmp_path):
+    from grader.release import scan_for_solutions, solution_blocks
+    from grader.submissions import library_files, with_course_library
+
+    repo = Path(__file__).resolve().parent.parent
+    package = tmp_path / "exercises"
+    shutil.copytree(repo / "exercises", package, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    (package / "vector.py").write_text("# Exercise file, says the student\n")
+    (package / "body.py").unlink()
+    library = library_files(repo / "exercises")
+    assert "vector.py" in library and "response/momentum_1d.py" not in library and len(library) > 20
+    with with_course_library(package, repo / "exercises", tmp_path) as (graded, replaced):
+        assert replaced == ["body.py", "vector.py"]
+        for relative, source in library.items():
+            assert (graded / relative).read_bytes() == source.read_bytes()
+        stub = "response/momentum_1d.py"
+        assert (graded / stub).read_bytes() == (package / stub).read_bytes()
+        assert scan_for_solutions(graded, solution_blocks(repo / "solutions")) == []
+    assert not graded.exists()
+
+
+def test_the_autograder_bundles_the_courses_exercises_package(tmp_path):
+    from grader.gradescope import build_autograder_zip
+
+    with zipfile.ZipFile(build_autograder_zip(out=tmp_path / "autograder.zip")) as archive:
+        names = set(archive.namelist())
+    repo = Path(__file__).resolve().parent.parent
+    for path in (repo / "exercises").rglob("*.py"):
+        if "__pycache__" not in path.parts:
+            assert f"exercises/{path.relative_to(repo / 'exercises').as_posix()}" in names
+
+
+def test_the_student_editions_library_files_are_the_courses(release):
+    """What students get is what grading compares with: no student is told that an
+    untouched library file differs."""
+    from grader.submissions import library_files
+
+    repo = Path(__file__).resolve().parent.parent
+    for relative, path in library_files(repo / "exercises").items():
+        assert (release / "exercises" / relative).read_bytes() == path.read_bytes(), relative

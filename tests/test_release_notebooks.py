@@ -12,6 +12,7 @@ One release is built for the module (about 6 s).  Then:
 - the reference outputs are stored once, in the notebook: the fallback of a cell finds
   them in the notebook as saved after a run (marked ``book``: about 30 s), and says so
   when a run of the student's own code was saved over them;
+- Fig. 3.1 draws the student's grid once the grid exercise is written (marked ``book``);
 - the kernel that ``run.sh setup`` registers starts without ipykernel's warning about
   unencrypted TCP (a real ``ipykernel install``, started as Jupyter starts it).
 """
@@ -202,6 +203,30 @@ def test_the_fallback_finds_the_reference_in_the_notebook_as_saved(release, tmp_
     again = run_and_save()
     assert "no longer in 07_momentum.ipynb" in again[mine.id], again[mine.id]
     assert {k: v for k, v in again.items() if k != mine.id} == {k: v for k, v in first.items() if k != mine.id}
+
+
+@pytest.mark.book
+def test_the_grid_figure_shows_the_students_grid_once_it_is_written(release, tmp_path, monkeypatch):
+    """Fig. 3.1 needs the grid exercise only (not a later chapter's narrow phase): with
+    the grid written and every other stub left, it draws the student's grid."""
+    import nbformat
+    from nbclient import NotebookClient
+
+    student = tmp_path / "course"
+    shutil.copytree(release.student, student)
+    shutil.copy(REPO / "solutions/broadphase/uniform_grid.py", student / "exercises/broadphase/uniform_grid.py")
+    monkeypatch.setenv("PYTHONPATH", str(student))
+    monkeypatch.delenv("GRADER_CHECK_PACKAGE", raising=False)
+    path = student / "book" / "03_grid_and_quadtree.ipynb"
+    nb = nbformat.read(path, as_version=4)
+    figure = next(i for i, c in enumerate(nb.cells)
+                  if c.get("metadata", {}).get("mystnb", {}).get("figure", {}).get("name") == "fig-grid-scene")
+    nb.cells = nb.cells[:figure + 1]
+    NotebookClient(nb, kernel_name="collision-course", timeout=600,
+                   resources={"metadata": {"path": str(path.parent)}}).execute()
+    outputs = nb.cells[figure].outputs
+    assert not any(_text(o).startswith("[reference output]") for o in outputs), [_text(o) for o in outputs]
+    assert any("image/png" in o.get("data", {}) for o in outputs)
 
 
 # The kernel ------------------------------------------------------------------------------------------------------

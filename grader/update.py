@@ -523,9 +523,11 @@ def report(plan: Plan, backup_folder: Path | None, dry_run: bool) -> str:
         for step in steps:
             extra = f" (release's copy: {step.beside})" if step.beside else ""
             lines.append(f"  {step.path}{extra}" + (f"; {step.note}" if step.note else ""))
+    if any(s.path == "pyproject.toml" and s.data is not None for s in plan.steps):
+        lines.append("the course's packages changed (pyproject.toml): the next `bash run.sh` command installs them")
     changes = changelog_text(plan)
     if changes:
-        lines += ["", "What changed:", changes.rstrip()]
+        lines += ["", "What changed in the release:", changes.rstrip()]
     conflicts = [s for s in plan.steps if s.action == "conflict"]
     if conflicts:
         lines += ["", f"CONFLICTS in {len(conflicts)} file{'s' * (len(conflicts) > 1)}: you and the release changed "

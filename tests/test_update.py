@@ -367,3 +367,30 @@ def test_the_student_editions_library_files_are_the_courses(release):
     repo = Path(__file__).resolve().parent.parent
     for relative, path in library_files(repo / "exercises").items():
         assert (release / "exercises" / relative).read_bytes() == path.read_bytes(), relative
+
+
+def test_run_sh_update_takes_a_path_relative_to_where_it_was_called(release, tmp_path):
+    """``bash course/run.sh update new`` run by bash from the folder above: run.sh finds
+    the release there and hands over to the course's own ``grader update`` (the .venv is
+    a stand-in: its python is this one, already set up, its ``grader`` the course's)."""
+    course = student_copy(release, tmp_path)
+    new = derive(release, tmp_path / "new", "9.0.6", "- Relative paths.",
+                 edits={LIBRARY: (LIBRARY_LINE, LIBRARY_LINE.replace("-edge", "(-edge)"))})
+    bin_folder = course / ".venv" / "bin"
+    bin_folder.mkdir(parents=True)
+    (course / ".venv" / "pyvenv.cfg").write_text("home = /usr/bin\n")
+    (bin_folder / "python").symlink_to(sys.executable)
+    stamp = hashlib.sha1((course / "pyproject.toml").read_bytes()).hexdigest()[:12]
+    (course / ".venv" / f".installed-{stamp}").touch()
+    entry = f"import sys; sys.path.insert(0, {str(course)!r}); from grader.cli import main; sys.exit(main())"
+    (bin_folder / "grader").write_text(f'#!/bin/sh\nexec {sys.executable} -c "{entry}" "$@"\n')
+    (bin_folder / "grader").chmod(0o755)
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+
+    usage = subprocess.run(["bash", "course/run.sh", "update"], cwd=tmp_path, env=env, capture_output=True, text=True)
+    assert usage.returncode == 2 and "NEW_RELEASE" in usage.stderr
+    done = subprocess.run(["bash", "course/run.sh", "update", "new"], cwd=tmp_path, env=env, capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == DONE, done.stdout + done.stderr
+    assert "to version 9.0.6" in done.stdout and "Relative paths." in done.stdout
+    assert (course / LIBRARY).read_bytes() == (new / LIBRARY).read_bytes()

@@ -394,3 +394,12 @@ def test_run_sh_update_takes_a_path_relative_to_where_it_was_called(release, tmp
     assert done.returncode == DONE, done.stdout + done.stderr
     assert "to version 9.0.6" in done.stdout and "Relative paths." in done.stdout
     assert (course / LIBRARY).read_bytes() == (new / LIBRARY).read_bytes()
+
+
+def test_the_grader_knows_a_library_file_by_the_header_the_generator_writes():
+    from grader.submissions import LIBRARY_HEADER as KNOWN
+    from tools.generate_exercises import EXERCISE_HEADER, LIBRARY_HEADER, header
+
+    assert header("solutions/vector.py").startswith(KNOWN)
+    assert not header("solutions/x.py", [("f", "sat")]).startswith(KNOWN)
+    assert ("# " + LIBRARY_HEADER).startswith(KNOWN) and not ("# " + EXERCISE_HEADER).startswith(KNOWN)

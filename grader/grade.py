@@ -253,6 +253,7 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                 if todo:
                     chosen = resolve_isolation(isolation, warn)
                     for job in todo:
+                        job.isolation = chosen
                         job.library = library_digest
                     config = {"tests": [dataclasses.asdict(t) for t in tests], "limits": dataclasses.asdict(limits),
                               "isolation": chosen, "library": None if library is None else str(Path(library).resolve())}

@@ -145,7 +145,8 @@ def finish_job(job: Job, elapsed: float, tests: list[TestSpec], digest: str, out
         for index, test in enumerate(tests):
             outcome, seconds = job.outcomes.get(index, (Outcome("not_run", message="this test did not run"), 0.0))
             results.append(TestResult(test, outcome, seconds))
-        data = build_results(results, elapsed, submission.id, job.fingerprint, digest, job.package)
+        data = build_results(results, elapsed, submission.id, job.fingerprint, digest, job.package,
+                             job.isolation)
         state = "graded"
         if job.library_replaced:
             data["output"] += "\n" + library_note(job.library_replaced)

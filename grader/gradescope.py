@@ -43,10 +43,12 @@ import stat
 import sys
 import tempfile
 import time
-import tomllib
 import zipfile
 from pathlib import Path
 
+from .isolation import isolation_words
+from .module_graph import files_reached, ignored, third_party_modules
+from .pins import locked, pins_for_modules
 from .results import RESULTS_NAME, write_results
 
 HERE = Path(__file__).resolve().parent
@@ -55,12 +57,18 @@ ZIP_NAME = "autograder.zip"
 DEFAULT_ROOT = "/autograder"
 ROOT_VARIABLE = "AUTOGRADER_ROOT"
 PYTHON_VARIABLE = "AUTOGRADER_PYTHON"
-#: Packages of the ``dev`` extras that the grader needs at run time.
-GRADER_EXTRAS = ("hypothesis", "tqdm")
+#: Where grading starts (``run_autograder`` runs this module), relative to ``grader/``;
+#: the archive holds the grader files it reaches (:mod:`grader.module_graph`).
+ENTRY_POINTS = ("gradescope.py",)
+#: Folders of ``grader/`` shipped whole: the graded tests, public and hidden.
+GRADER_FOLDERS = ("tests",)
 #: Folders of the repository that go into the archive, whole (less caches).  ``exercises``:
 #: the library files every submission is graded with (grader.grade.COURSE_LIBRARY).
-BUNDLED_FOLDERS = ("grader", "solutions", "exercises")
+BUNDLED_FOLDERS = ("solutions", "exercises")
 BUNDLED_FILES = ("pyproject.toml",)
+#: Modules the bundled code imports only where they are already loaded, never while
+#: grading: not installed in the image.
+OPTIONAL_MODULES = {"IPython": "grader/check.py shows its table as HTML inside a notebook"}
 FIXED_TIME = (2020, 1, 1, 0, 0, 0)  # every member's date: the same sources, the same archive
 
 SETUP_SH = r"""#!/usr/bin/env bash
@@ -97,10 +105,10 @@ fi
 "$ROOT/venv/bin/python" -m pip install --no-cache-dir --upgrade pip
 "$ROOT/venv/bin/python" -m pip install --no-cache-dir -r "$SOURCE/requirements.txt"
 
-# Fail the build now, not at the first submission, if the grader cannot load its spec.
+# Fail the build now, not at the first submission, if a package the grader imports is
+# missing or the grader cannot load its tests.
 cd "$SOURCE"
-PYTHONPATH="$SOURCE" "$ROOT/venv/bin/python" -c \
-    "from grader.spec import load_spec; tests = load_spec(); print(len(tests), 'tests,', sum(t.points for t in tests), 'points')"
+PYTHONPATH="$SOURCE" "$ROOT/venv/bin/python" -m grader.gradescope check-setup
 """
 
 RUN_AUTOGRADER = r"""#!/usr/bin/env bash
@@ -118,46 +126,64 @@ fi
 mkdir -p "$ROOT/results"
 cd "$SOURCE"
 export PYTHONPATH="$SOURCE" PYTHONDONTWRITEBYTECODE=1 MPLBACKEND=Agg
-exec "$PYTHON" -m grader.gradescope run
+# AUTOGRADER_ISOLATION=plain tries the fallback of a container that refuses bubblewrap.
+exec "$PYTHON" -m grader.gradescope run --isolation "${AUTOGRADER_ISOLATION:-auto}"
 """
 
 
-def requirements(pyproject: Path = REPO_ROOT / "pyproject.toml") -> list[str]:
-    """The pinned packages the grader needs: the project's dependencies, plus those of the
-    ``dev`` extras named in ``GRADER_EXTRAS``."""
-    project = tomllib.loads(Path(pyproject).read_text(encoding="utf-8"))["project"]
-    wanted = list(project.get("dependencies", []))
-    names = {_package_name(r) for r in wanted}
-    for requirement in project.get("optional-dependencies", {}).get("dev", []):
-        name = _package_name(requirement)
-        if name in GRADER_EXTRAS and name not in names:
-            wanted.append(requirement)
-            names.add(name)
-    return wanted
+def grader_files(grader_dir: Path = HERE) -> list[Path]:
+    """The files of ``grader/`` the archive holds: what :data:`ENTRY_POINTS` reach, and
+    :data:`GRADER_FOLDERS` whole."""
+    grader_dir = Path(grader_dir)
+    start = [(grader_dir / name, "entry point") for name in ENTRY_POINTS]
+    for folder in GRADER_FOLDERS:
+        start += [(path, "graded tests") for path in sorted((grader_dir / folder).rglob("*"))
+                  if path.is_file() and not path.is_symlink() and not _hidden(path.relative_to(grader_dir))]
+    # release_files/ holds templates of the student edition, not files the grader reads.
+    reached = files_reached(grader_dir, start, excluded=lambda relative: relative.startswith("release_files/"))
+    return [grader_dir / relative for relative in reached]
 
 
-def _package_name(requirement: str) -> str:
-    name = requirement
-    for mark in "=<>!~[;@ ":
-        name = name.split(mark, 1)[0]
-    return name.strip().lower().replace("_", "-")
+def _hidden(relative: Path) -> bool:
+    """Caches, compiled files and hidden files (editor swap files, locks)."""
+    return ignored(relative) or any(part.startswith(".") for part in relative.parts)
 
 
 def bundled_files(repo_root: Path = REPO_ROOT) -> list[tuple[str, Path]]:
     """(name in the archive, file) of every grader and reference file, sorted."""
-    files = []
+    files = [(path.relative_to(repo_root).as_posix(), path) for path in grader_files(repo_root / "grader")]
     for folder in BUNDLED_FOLDERS:
         for path in sorted((repo_root / folder).rglob("*")):
-            relative = path.relative_to(repo_root)
-            if path.is_symlink() or not path.is_file():
-                continue
-            if "__pycache__" in relative.parts or path.suffix in (".pyc", ".pyo") \
-                    or any(part.startswith(".") for part in relative.parts):
-                continue  # caches, and hidden files (editor swap files, locks)
-            files.append((relative.as_posix(), path))
+            if path.is_file() and not path.is_symlink() and not _hidden(path.relative_to(repo_root)):
+                files.append((path.relative_to(repo_root).as_posix(), path))
     for name in BUNDLED_FILES:
         files.append((name, repo_root / name))
     return sorted(files)
+
+
+def imported_packages(files: list[tuple[str, Path]]) -> dict[str, str]:
+    """{third-party top-level module: the first bundled file importing it}, less
+    :data:`OPTIONAL_MODULES`."""
+    found = third_party_modules((name, path) for name, path in files if name.endswith(".py"))
+    return {module: where for module, where in found.items() if module not in OPTIONAL_MODULES}
+
+
+def requirements(repo_root: Path = REPO_ROOT) -> list[str]:
+    """The pins of ``pyproject.toml`` that provide what the bundled code imports (pytest,
+    numpy, numba ...), in its order."""
+    return pins_for_modules(imported_packages(bundled_files(repo_root)), repo_root / "pyproject.toml")
+
+
+def requirements_text(repo_root: Path = REPO_ROOT) -> str:
+    """``requirements.txt``: those pins, then what they pulled in here (a lock: the image
+    gets the versions the grader was tested with)."""
+    direct = requirements(repo_root)
+    return "\n".join([
+        "# Written by `grader gradescope-zip`: the pins of the course's pyproject.toml that",
+        "# provide what the grader and the reference engine import,",
+        *direct,
+        "# and what those pulled in, at the versions the grader was tested with.",
+        *locked(direct), ""])
 
 
 def _add(archive: zipfile.ZipFile, name: str, data: bytes, executable: bool = False) -> None:
@@ -180,7 +206,7 @@ def build_autograder_zip(out: str | os.PathLike = ZIP_NAME, repo_root: Path = RE
         with zipfile.ZipFile(temporary, "w") as archive:
             _add(archive, "setup.sh", SETUP_SH.encode(), executable=True)
             _add(archive, "run_autograder", RUN_AUTOGRADER.encode(), executable=True)
-            _add(archive, "requirements.txt", ("\n".join(requirements(repo_root / "pyproject.toml")) + "\n").encode())
+            _add(archive, "requirements.txt", requirements_text(repo_root).encode())
             for name, path in bundled_files(repo_root):
                 _add(archive, name, path.read_bytes())
         os.chmod(temporary, 0o644)
@@ -262,6 +288,9 @@ def run_autograder(root: str | os.PathLike | None = None, isolation: str = "auto
     write_results(data, results_path)
     print(f"{row['state']}: {data['score']:g} / {data['max_score']:g} points in "
           f"{time.perf_counter() - started:.1f} s")
+    isolation = (data.get("extra_data") or {}).get("isolation")
+    if isolation:
+        print(isolation_words(isolation))
     if row["state"] == "refused":
         print(data["output"])
     for test in data["tests"]:
@@ -269,6 +298,36 @@ def run_autograder(root: str | os.PathLike | None = None, isolation: str = "auto
         print(f"  {test['score']:>5g} / {test['max_score']:<4g} {extra.get('status', test['status']):16s} "
               f"{extra.get('test', test['name'])} ({test['visibility']})")
     print(f"results: {results_path}", flush=True)
+    return 0
+
+
+def check_setup(source: Path = REPO_ROOT) -> int:
+    """What ``setup.sh`` ends with: import every package the bundled code imports and
+    load the graded tests; 0 when all is there, else 1 with what is missing."""
+    import importlib
+
+    from .spec import SpecError, load_spec
+
+    files = [(path.relative_to(source).as_posix(), path) for path in sorted(source.rglob("*.py"))
+             if path.is_file() and not _hidden(path.relative_to(source))
+             and path.relative_to(source).parts[0] in ("grader", *BUNDLED_FOLDERS)]
+    missing = []
+    for module, where in imported_packages(files).items():
+        try:
+            importlib.import_module(module)
+        except ImportError as exc:
+            missing.append(f"{module} (imported by {where}): {exc}")
+    if missing:
+        print("check-setup: these packages cannot be imported; is requirements.txt complete?\n  "
+              + "\n  ".join(missing), flush=True)
+        return 1
+    try:
+        tests = load_spec()
+    except SpecError as exc:
+        print(f"check-setup: the graded tests cannot be loaded: {exc}", flush=True)
+        return 1
+    print(f"check-setup: {len(files)} modules' imports found; {len(tests)} tests, "
+          f"{sum(t.points for t in tests):g} points", flush=True)
     return 0
 
 
@@ -297,9 +356,12 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--isolation", choices=("auto", "bwrap", "plain"), default="auto")
     run.add_argument("--timeout-submission", type=float, default=None, metavar="SECONDS")
     add_gradescope_arguments(commands.add_parser("zip", help="build autograder.zip"))
+    commands.add_parser("check-setup", help="import what the grader needs and load its tests (setup.sh's last step)")
     args = parser.parse_args(argv)
     if args.command == "zip":
         return main_gradescope_zip(args)
+    if args.command == "check-setup":
+        return check_setup()
     return run_autograder(args.root, args.isolation, args.timeout_submission)
 
 

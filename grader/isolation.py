@@ -49,3 +49,11 @@ def resolve_isolation(requested: str = "auto", warn: Callable[[str], None] | Non
                  "(student code runs as this user and can read the grader's files)")
         return "plain"
     return chosen
+
+
+def isolation_words(isolation: str) -> str:
+    """How the student's code was isolated, said for the instructor."""
+    return {"bwrap": "isolation: bubblewrap (a private file system, no network, an unprivileged user)",
+            "plain": "isolation: plain, resource limits only (bubblewrap could not start here: the student's "
+                     "code could read the grader's files that its user may read)"}.get(
+        isolation, f"isolation: {isolation}")

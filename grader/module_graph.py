@@ -142,14 +142,16 @@ def imported_modules(source: str) -> list[str]:
     return names
 
 
-def third_party_modules(files: Iterable[tuple[str, str]]) -> dict[str, str]:
-    """{top-level module: the first file importing it} of the (name, source) pairs,
-    less the standard library and this repository's own packages."""
+def third_party_modules(files: Iterable[tuple[str, Path]]) -> dict[str, str]:
+    """{top-level module: the first file importing it} of the (name, path) pairs, less
+    the standard library, this repository's own packages and the modules beside the
+    importing file (a script's own helpers, as ``worker.py`` imports ``codec``)."""
     found: dict[str, str] = {}
-    for name, source in files:
-        for module in imported_modules(source):
+    for name, path in files:
+        for module in imported_modules(Path(path).read_text(encoding="utf-8")):
             top = module.split(".")[0]
-            if top in sys.stdlib_module_names or top in LOCAL_PACKAGES or top == "__future__":
+            if (top in sys.stdlib_module_names or top in LOCAL_PACKAGES or top == "__future__"
+                    or (Path(path).parent / f"{top}.py").is_file()):
                 continue
             found.setdefault(top, name)
     return dict(sorted(found.items()))

@@ -50,7 +50,7 @@ from .credit import GradedFailure, partial_points
 from .figures import bounded
 from .outcome import MESSAGE_LIMIT, Outcome, StudentCallFailed, StudentCallStopped, capped
 from .replay import is_hypothesis_test, replaying
-from .sandbox import Limits, Sandbox
+from .sandbox import Limits, Sandbox, SandboxBroken
 from .spec import EXERCISES, VISIBILITIES, SpecError, TestSpec
 from .student import StudentCode
 
@@ -218,6 +218,7 @@ class GradedRun:
     specs: list = field(default_factory=list)
     results: list = field(default_factory=list)
     started: float = field(default_factory=time.perf_counter)
+    broken: SandboxBroken | None = None   # the sandbox could not start: no test result stands
     _student: StudentCode | None = None
     _reference: StudentCode | None = None
     _boxes: list = field(default_factory=list)
@@ -302,6 +303,13 @@ class GradedRun:
     @pytest.hookimpl(hookwrapper=True)
     def pytest_runtest_makereport(self, item, call):
         report = (yield).get_result()
+        broken = call.excinfo.value if call.excinfo is not None else None
+        if isinstance(broken, BaseExceptionGroup) and broken.exceptions:
+            broken = broken.exceptions[0]
+        if isinstance(broken, SandboxBroken):
+            self.broken = broken   # the grader's own failure: the run stops, and says so
+            item.session.shouldstop = str(broken)
+            return
         if call.when == "call" or (call.when == "setup" and report.outcome != "passed"):
             outcome = outcome_of(call.excinfo, item)
             if outcome.status == "failed" and outcome.figure is None and PICTURE_KEY in item.stash:

@@ -55,6 +55,7 @@ from pathlib import Path
 
 from .module_graph import files_reached, ignored, module_file
 from .module_graph import imported_modules as third_party_imports
+from .pins import installed_closure, normal_name, requirement_name
 
 GRADER_DIR = Path(__file__).resolve().parent
 REPO_ROOT = GRADER_DIR.parent
@@ -166,14 +167,6 @@ def public_tests_using_reference(grader_dir: Path = GRADER_DIR) -> list[str]:
 
 
 # Dependencies ----------------------------------------------------------------------------------
-def _normal(name: str) -> str:
-    return re.sub(r"[-_.]+", "-", name).lower()
-
-
-def _requirement_name(requirement: str) -> str:
-    return _normal(re.split(r"[\s\[<>=!~;]", requirement.strip(), maxsplit=1)[0])
-
-
 def student_requirements(modules: set[str], pyproject: Path = REPO_ROOT / "pyproject.toml") -> list[str]:
     """The runtime pins of the repository that the student edition needs, pytest as its
     dev extra pins it, and the notebook packages (pinned like the ``book`` extra where
@@ -183,13 +176,13 @@ def student_requirements(modules: set[str], pyproject: Path = REPO_ROOT / "pypro
     data = tomllib.loads(Path(pyproject).read_text(encoding="utf-8"))
     project = data["project"]
     extras = project.get("optional-dependencies", {})
-    pins = {_requirement_name(r): r for extra in extras.values() for r in extra}
+    pins = {requirement_name(r): r for extra in extras.values() for r in extra}
     requirements = used_requirements(list(project.get("dependencies", [])), modules)
     if "pytest" not in pins:
         raise ReleaseError("the repository's pyproject.toml pins no pytest in its extras")
     requirements.append(pins["pytest"])
     for name, version in NOTEBOOK_PACKAGES.items():
-        requirements.append(pins.get(_normal(name), f"{name}=={version}"))
+        requirements.append(pins.get(normal_name(name), f"{name}=={version}"))
     return requirements
 
 
@@ -199,29 +192,10 @@ def used_requirements(requirements: list[str], modules: set[str]) -> list[str]:
     from importlib import metadata
 
     provided = metadata.packages_distributions()
-    wanted = {_normal(d) for module in modules for d in provided.get(module, [])}
-    kept = [r for r in requirements if _requirement_name(r) in wanted]
-    needed = _installed_closure(kept)
-    return [r for r in requirements if _requirement_name(r) in needed]
-
-
-def _installed_closure(requirements: list[str]) -> set[str]:
-    """The distributions ``requirements`` bring, as installed here (names normalised)."""
-    from importlib import metadata
-
-    seen: set[str] = set()
-    stack = [_requirement_name(r) for r in requirements]
-    while stack:
-        name = stack.pop()
-        if name in seen:
-            continue
-        seen.add(name)
-        try:
-            requires = metadata.requires(name) or []
-        except metadata.PackageNotFoundError:
-            continue
-        stack += [_requirement_name(r) for r in requires if "extra ==" not in r.replace('"', "").replace("'", "")]
-    return seen
+    wanted = {normal_name(d) for module in modules for d in provided.get(module, [])}
+    kept = [r for r in requirements if requirement_name(r) in wanted]
+    needed = installed_closure(kept)
+    return [r for r in requirements if requirement_name(r) in needed]
 
 
 def check_dependencies(modules: dict[str, str], requirements: list[str],
@@ -233,14 +207,14 @@ def check_dependencies(modules: dict[str, str], requirements: list[str],
     from importlib import metadata
 
     provided = metadata.packages_distributions()
-    installed = _installed_closure(requirements)
+    installed = installed_closure(requirements)
     extras = tomllib.loads(Path(pyproject).read_text(encoding="utf-8"))["project"].get("optional-dependencies", {})
-    pins = {_requirement_name(r): r for extra in extras.values() for r in extra}
+    pins = {requirement_name(r): r for extra in extras.values() for r in extra}
     added, warnings = [], []
     for module, where in sorted(modules.items()):
         if module in sys.stdlib_module_names or module in LOCAL_PACKAGES or module == "__future__":
             continue
-        distributions = [_normal(d) for d in provided.get(module, [])]
+        distributions = [normal_name(d) for d in provided.get(module, [])]
         if not distributions:
             warnings.append(f"{where} imports {module}, which is not installed here: is it optional?")
             continue
@@ -252,7 +226,7 @@ def check_dependencies(modules: dict[str, str], requirements: list[str],
                                "pyproject.toml provides: pin it there")
         added.append(pinned)
         requirements.append(pinned)
-        installed |= _installed_closure([pinned])
+        installed |= installed_closure([pinned])
     return added, warnings
 
 

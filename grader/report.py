@@ -31,6 +31,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from .figures import GOT_COLOR, EXPECTED_COLOR, figure_png_base64
+from .isolation import isolation_words
 from .results import output_text
 
 RESULTS_NAME = "results.json"
@@ -72,6 +73,7 @@ code { font-size: 12px; }
 .badge { color: white; border-radius: 4px; padding: 1px 7px; font-weight: 600; white-space: nowrap; }
 .bar { display: inline-block; height: 10px; background: #cf222e; vertical-align: middle; }
 .muted { color: #6e7781; }
+.warning { color: #9a6700; font-weight: 600; }
 .stats td { border: none; padding: 2px 12px 2px 0; }
 img { max-width: 100%; }
 """
@@ -113,6 +115,7 @@ class Submission:
     execution_time: float | None
     tests: list[ResultRow]
     leaderboard: list[dict]
+    isolation: str = ""   # how the student's code was isolated (grader.sandbox); "" if not recorded
 
 
 def _number(value, default=None):
@@ -178,7 +181,8 @@ def read_submission(path: Path) -> Submission | None:
     return Submission(id=str(meta.get("submission_id") or Path(path).parent.name), path=Path(path), score=score,
                       max_score=max_score, state=str(meta.get("state") or "graded"),
                       reason=str(meta.get("reason") or ""), output=str(data.get("output") or ""),
-                      execution_time=_number(data.get("execution_time")), tests=tests, leaderboard=board)
+                      execution_time=_number(data.get("execution_time")), tests=tests, leaderboard=board,
+                      isolation=str(meta.get("isolation") or ""))
 
 
 # HTML helpers -------------------------------------------------------------------------------
@@ -263,6 +267,8 @@ def write_student_report(results_json: Path, out_html: Path, figures: dict | Non
             + (f" &middot; graded in {submission.execution_time:.3g} s" if submission.execution_time is not None
                else "")
             + (f" &middot; state: {_e(submission.state)}" if submission.state != "graded" else "") + "</p>"]
+    if submission.isolation:
+        body.append(f"<p class='muted'>{_e(isolation_words(submission.isolation))}</p>")
     if submission.output:
         body.append(f"<pre>{_e(submission.output)}</pre>")
     if submission.reason:
@@ -470,6 +476,10 @@ def write_class_report(out_dir: Path) -> Path:
             f"<p>{len(submissions)} results files in <code>{_e(out_dir)}</code>: {len(graded)} graded, "
             f"{len(refused)} not gradable, {len(unreadable)} unreadable.</p>"]
 
+    isolations = Counter(s.isolation for s in graded if s.isolation)
+    for isolation, count in sorted(isolations.items()):
+        body.append(f"<p class='{'warning' if isolation == 'plain' else 'muted'}'>{count} graded with "
+                    f"{_e(isolation_words(isolation))}</p>")
     body.append("<h2>Summary</h2>")
     scores = [s.score for s in graded]
     maxima = sorted({s.max_score for s in graded if s.max_score is not None})

@@ -137,7 +137,7 @@ def student_output(outcome: Outcome, score: float, max_score: float) -> str:
         lines.append(message)
     lines += format_metrics(plain(outcome.metrics or {}))
     printed = (getattr(outcome, "output", "") or "").rstrip()
-    if printed:
+    if printed and status != "passed":  # shown under failing tests only
         lines.append("Your code printed:\n" + printed)
     text = "\n".join(lines)
     if len(text) > OUTPUT_LIMIT:
@@ -258,7 +258,7 @@ def _metadata(submission_id, fingerprint, spec_hash, state, **more) -> dict:
 
 def build_results(results: list, execution_time: float, submission_id: str | None = None,
                   fingerprint: str | None = None, spec_hash: str | None = None,
-                  package: str | None = None) -> dict:
+                  package: str | None = None, isolation: str | None = None) -> dict:
     """The results.json data of a graded submission.
 
     Parameters
@@ -271,6 +271,9 @@ def build_results(results: list, execution_time: float, submission_id: str | Non
         Kept in the top-level ``extra_data`` (the rerun compares the last two).
     package : str, optional
         Where the exercises package was found, relative to the submission.
+    isolation : str, optional
+        How the student's code was isolated (``bwrap`` or ``plain``, see
+        :mod:`grader.sandbox`): kept for the instructor's report.
     """
     tests = [results_entry(r.test, r.outcome, r.seconds) for r in results]
     where = f" (found at '{package}')" if package and package != "." else ""
@@ -281,7 +284,8 @@ def build_results(results: list, execution_time: float, submission_id: str | Non
         "output": f"Your exercises package{where} was graded: see each test below.",
         "tests": tests,
         "leaderboard": leaderboard([(r.test, r.outcome) for r in results]),
-        "extra_data": _metadata(submission_id, fingerprint, spec_hash, "graded", package=package),
+        "extra_data": _metadata(submission_id, fingerprint, spec_hash, "graded", package=package,
+                                isolation=isolation),
     }
     return data
 

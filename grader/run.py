@@ -73,7 +73,8 @@ def package_folder(path: Path) -> Path:
 def run_tests(student_dir: Path, tests: list[TestSpec], limits: Limits = Limits(), slot: int = 0,
               isolation: str = "auto", reference_dir: Path | None = None,
               budget_seconds: float | None = None, progress=None, exitfirst: bool = False) -> list[TestResult]:
-    """Run ``tests`` on the package in ``student_dir``; never raises for student faults.
+    """Run ``tests`` on the package in ``student_dir``; never raises for student faults
+    (:class:`grader.sandbox.SandboxBroken` when the sandbox cannot start at all).
 
     ``budget_seconds`` bounds the whole run: tests not started in time end as
     ``not_run``.  ``progress(result)`` is called after each test.  ``exitfirst`` stops
@@ -86,6 +87,8 @@ def run_tests(student_dir: Path, tests: list[TestSpec], limits: Limits = Limits(
                     names={t.name for t in tests})
     paths = list(dict.fromkeys(t.path for t in tests))  # pytest runs the modules in the order of ``tests``
     code, text = pytest_main((["-x"] if exitfirst else []) + paths, run)
+    if run.broken is not None:
+        raise run.broken
     if exitfirst and any(r.outcome.status != "passed" for r in run.results):
         return run.results
     done = {r.test.name for r in run.results}

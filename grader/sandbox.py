@@ -58,6 +58,7 @@ from pathlib import Path
 from typing import Any
 
 from . import codec, seccomp
+from .errors import GradingError
 from .memory_cage import MemoryCage
 
 HERE = Path(__file__).resolve().parent
@@ -132,6 +133,30 @@ class CallResult:
     @property
     def ok(self) -> bool:
         return self.status == "ok"
+
+
+class SandboxBroken(GradingError):
+    """The worker died before it said hello, so before any student code ran: the
+    sandbox itself cannot start here (a grader or machine fault, never the student's)."""
+
+
+def reachable_temp_folder() -> str | None:
+    """A temporary folder that any user can reach (every folder on its path searchable
+    by others), for a worker that drops to a user of its own without bubblewrap; None
+    if this process's own temporary folder already is one.
+
+    The grading folders under it (Gradescope's ``/tmp/grading-*``, made by root) are
+    0700: a worker folder inside them is out of the worker's reach."""
+    candidates = [tempfile.gettempdir(), "/tmp", "/var/tmp", "/dev/shm"]
+    for index, folder in enumerate(candidates):
+        path = Path(folder)
+        try:
+            if path.is_dir() and all(part.stat().st_mode & stat.S_IXOTH for part in [path, *path.parents]):
+                return None if index == 0 else folder
+        except OSError:
+            continue
+    raise SandboxBroken("no temporary folder here can be reached by the sandbox's user "
+                        f"(tried {', '.join(candidates)})")
 
 
 def bwrap_available() -> bool:
@@ -329,6 +354,7 @@ class Sandbox:
         self._buffer = bytearray()
         self.restarts = 0
         self._settled: tuple[int, frozenset] | None = None  # see _reap_strays
+        self.broken: SandboxBroken | None = None  # set once the worker could not even start
 
     # Life cycle -----------------------------------------------------------------
     def __enter__(self) -> "Sandbox":
@@ -346,7 +372,9 @@ class Sandbox:
         self.close()
 
     def _prepare(self) -> None:
-        self.workdir = Path(tempfile.mkdtemp(prefix="grader-sandbox-"))
+        # Without bubblewrap the worker reaches its folder through the host's file system.
+        parent = reachable_temp_folder() if self.uid is not None and self.isolation == "plain" else None
+        self.workdir = Path(tempfile.mkdtemp(prefix="grader-sandbox-", dir=parent))
         copy_package(self.package_dir, self.workdir / "exercises")
         tools = self.workdir / ".grader"
         tools.mkdir()
@@ -459,7 +487,8 @@ class Sandbox:
         self._response_fd = read_end
         self._buffer = bytearray()
         self._worker_pid = None
-        threading.Thread(target=self._drain_stderr, args=(self.process.stderr,), daemon=True).start()
+        self._drainer = threading.Thread(target=self._drain_stderr, args=(self.process.stderr,), daemon=True)
+        self._drainer.start()
 
     def _drain_stderr(self, stream) -> None:
         kept = 0
@@ -525,6 +554,8 @@ class Sandbox:
         with values it computes itself, so it is worth no more than returning that
         value.
         """
+        if self.broken is not None:
+            raise self.broken
         if self.process is None or self.process.poll() is not None:
             if self.process is not None:
                 self.restarts += 1
@@ -725,14 +756,42 @@ class Sandbox:
             if killed:
                 time.sleep(0.005)
 
+    def _said_hello(self) -> bool:
+        """True if the worker wrote its hello line (read or still in the channel)."""
+        if self._worker_pid is not None:
+            return True
+        with selectors.DefaultSelector() as selector:
+            selector.register(self._response_fd, selectors.EVENT_READ)
+            while len(self._buffer) < RESPONSE_LIMIT and selector.select(timeout=0):
+                chunk = os.read(self._response_fd, 1 << 20)
+                if not chunk:
+                    break
+                self._buffer += chunk
+        for line in bytes(self._buffer).split(b"\n"):
+            try:
+                data = json.loads(line)
+            except (ValueError, RecursionError):
+                continue
+            if type(data) is dict and data.get("hello") is True:
+                return True
+        return False
+
     def _crashed(self, started: float) -> CallResult:
         process = self.process
         try:
             code = process.wait(timeout=2) if process is not None else None
         except subprocess.TimeoutExpired:  # alive, but it closed its answer channel
             code = None
+        if code is not None and getattr(self, "_drainer", None) is not None:
+            self._drainer.join(timeout=1.0)   # the worker is gone: what it wrote is all there
         stderr = "".join(self._stderr).strip()
+        hello = self._said_hello()
         self._kill()
+        if not hello:
+            self.broken = SandboxBroken(
+                f"the grader could not start its sandbox ({self.isolation} isolation): the worker process ended "
+                f"with status {code} before running any student code" + (f":\n{stderr[-1500:]}" if stderr else ""))
+            raise self.broken
         if code is not None and code > 128 and self.isolation == "bwrap":
             code = -(code - 128)  # bwrap's init reports a signal death as 128 + signal
         if code is None:

@@ -268,6 +268,7 @@ class Job:
     used: float = 0.0  # seconds of earlier attempts
     deaths: int = 0
     package: str | None = None
+    isolation: str | None = None   # bwrap or plain, as the batch resolved it
     library: str | None = None   # hash of the course's library files graded with (submissions.library_hash)
     library_replaced: list[str] = field(default_factory=list)   # the submission's that differed
     refused: str | None = None

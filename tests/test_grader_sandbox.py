@@ -1,5 +1,6 @@
 """The sandbox: student code runs isolated, limited, and every failure is contained."""
 import os
+import sys
 import textwrap
 import time
 from pathlib import Path
@@ -354,3 +355,24 @@ def test_a_python_installed_under_tmp_stays_visible(package, monkeypatch, tmp_pa
     tmpfs = command.index("--tmpfs")
     assert command[tmpfs + 1] == "/tmp"
     assert tmpfs < command.index(str(venv))
+
+
+def test_a_sandbox_that_cannot_start_is_the_graders_failure_not_a_crash(package, monkeypatch):
+    """A worker that dies before its hello line never ran student code (a folder out of
+    its user's reach, a refused namespace): SandboxBroken, every later call too, and
+    run_tests gives no result at all rather than a column of "crashed"."""
+    from grader.run import run_tests
+    from grader.sandbox import SandboxBroken
+    from grader.spec import load_spec
+
+    broken = [sys.executable, "-c", "import sys; sys.stderr.write('cannot open worker.py'); sys.exit(2)"]
+    monkeypatch.setattr(Sandbox, "_command", lambda self: broken)
+    with Sandbox(package, Limits(call_timeout=5.0)) as box:
+        for _ in range(2):
+            with pytest.raises(SandboxBroken, match="(?s)before running any student code.*cannot open worker.py"):
+                box.call("exercises.hostile", "anything")
+        assert box.restarts == 0   # not restarted for each call
+    tests = [t for t in load_spec() if t.exercise == "momentum"][:3]
+    with pytest.raises(SandboxBroken):
+        run_tests(package.parent, tests, Limits(call_timeout=5.0))
+

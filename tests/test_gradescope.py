@@ -3,8 +3,10 @@
 Gradescope unpacks the archive into ``/autograder/source``, copies ``run_autograder`` to
 ``/autograder/run_autograder``, puts the submission in ``/autograder/submission`` and
 reads ``/autograder/results/results.json``.  Here the root is a temporary folder
-(``AUTOGRADER_ROOT``) and the Python is this one (``AUTOGRADER_PYTHON``), since
-``setup.sh`` installs into the image and cannot run here.
+(``AUTOGRADER_ROOT``).  The grading tests run in a fresh venv built from the archive's
+own ``requirements.txt`` and nothing else (``AUTOGRADER_PYTHON``): the instructor's
+packages prove nothing about the image.  setup.sh's system part (apt, as root, in a
+fresh image) is tried by ``bash run.sh release-check`` (tools/release_check.py).
 """
 from __future__ import annotations
 
@@ -62,7 +64,7 @@ def test_archive_holds_what_gradescope_needs_at_its_top(archive):
     for script in ("setup.sh", "run_autograder"):
         assert stat.S_IMODE(infos[script].external_attr >> 16) == 0o755
     assert not [n for n in infos if "__pycache__" in n or n.endswith(".pyc")]
-    assert not [n for n in infos if n.startswith(("exercises/", "tests/", ".venv/"))]
+    assert not [n for n in infos if n.startswith(("tests/", ".venv/", "book/", "tools/"))]
     assert not [n for n in infos if n.startswith("/") or ".." in n.split("/")]
 
 
@@ -70,14 +72,28 @@ def test_archive_is_the_same_from_the_same_sources(archive, tmp_path):
     assert build_autograder_zip(tmp_path / "again.zip").read_bytes() == archive.read_bytes()
 
 
-def test_requirements_are_the_pins_of_pyproject(archive):
+def test_requirements_are_pins_of_pyproject_for_what_the_archive_imports(archive):
     project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    every_pin = [*project["dependencies"], *(r for extra in project["optional-dependencies"].values() for r in extra)]
     with zipfile.ZipFile(archive) as handle:
-        pinned = handle.read("requirements.txt").decode().split()
-    assert pinned == requirements()
-    assert set(project["dependencies"]) <= set(pinned)
-    assert any(p.startswith("hypothesis==") for p in pinned)  # the checks shrink with it
+        lines = handle.read("requirements.txt").decode().splitlines()
+    pinned = [line for line in lines if line and not line.startswith("#")]
     assert all("==" in p for p in pinned)
+    direct = requirements()
+    assert pinned[:len(direct)] == direct and set(direct) <= set(every_pin)
+    names = {p.split("==")[0] for p in pinned}
+    # The graded tests run under pytest and shrink with hypothesis; the reference is compiled.
+    assert {"pytest", "hypothesis", "numpy", "numba"} <= names
+    # What only the instructor or the book uses is not installed on Gradescope.
+    assert not names & {"jupyter-book", "sphinx", "myst-nb", "box2d", "cosmic-ray", "scipy", "ipython"}
+
+
+def test_archive_holds_only_what_grading_reaches(archive):
+    with zipfile.ZipFile(archive) as handle:
+        names = set(handle.namelist())
+    for instructor_only in ("grader/release.py", "grader/release_book.py", "grader/similarity.py",
+                            "grader/samples/example_class.py", "grader/release_files/run.sh"):
+        assert instructor_only not in names
 
 
 def test_scripts_are_valid_bash(archive, tmp_path):
@@ -87,26 +103,6 @@ def test_scripts_are_valid_bash(archive, tmp_path):
         assert subprocess.run(["bash", "-n", str(tmp_path / script)], capture_output=True).returncode == 0
     setup = (tmp_path / "setup.sh").read_text()
     assert "bubblewrap" in setup and "-venv" in setup and "requirements.txt" in setup
-
-
-def test_run_autograder_gives_the_reference_full_marks(archive, tmp_path):
-    root = fake_root(tmp_path, archive)
-    shutil.copytree(REPO / "solutions", root / "submission" / "exercises", ignore=IGNORE)
-    # Proof that the bundled grader runs, not this checkout: change a weight in the copy.
-    public = root / "source" / "grader" / "tests" / "public" / "test_momentum.py"
-    text = public.read_text()
-    marked = "@pytest.mark.points(2)\ndef test_elastic("
-    assert marked in text
-    public.write_text(text.replace(marked, "@pytest.mark.points(5)\ndef test_elastic("))
-    completed = run_autograder(root)
-    assert completed.returncode == 0, completed.stdout + completed.stderr
-    data = json.loads((root / "results" / "results.json").read_text())
-    total = sum(t.points for t in load_spec()) + 3
-    assert data["score"] == pytest.approx(total) and data["max_score"] == pytest.approx(total)
-    assert all(t["status"] == "passed" for t in data["tests"])
-    assert {t["visibility"] for t in data["tests"]} == {t.visibility for t in load_spec()}
-    assert data["leaderboard"]
-    assert f"graded: {total:g} / {total:g} points" in completed.stdout
 
 
 def test_run_autograder_explains_an_empty_submission(archive, tmp_path):

@@ -152,6 +152,33 @@ def test_student_notebooks_need_neither_myst_nb_nor_sphinx(release, monkeypatch)
     assert shown == [2.5]
 
 
+def test_animation_frames_are_whole_images(release):
+    """The animations' frames, their base64 joined onto one line in the student edition:
+    as many as the chapter's, each a PNG that decodes whole."""
+    import base64
+    import io
+
+    from PIL import Image
+
+    frame = re.compile(r'frames\[\d+\] = "data:image/png;base64,([^"]*)"')
+    checked = 0
+    for path in sorted(CHAPTERS.glob("*.ipynb")):
+        def animations(nb: dict) -> list[str]:
+            return ["".join(o["data"]["text/html"]) for c in nb["cells"] for o in c.get("outputs", [])
+                    if "frames[0]" in "".join(o.get("data", {}).get("text/html", ""))]
+
+        theirs = animations(_notebook(path))
+        mine = animations(_notebook(release.student / "book" / path.name))
+        starts = re.compile(r'frames\[\d+\] = "data:image/png;base64,')
+        assert [len(frame.findall(a)) for a in mine] == [len(starts.findall(a)) for a in theirs]
+        for animation in mine:
+            for data in frame.findall(animation):
+                assert "\\" not in data and "\n" not in data
+                Image.open(io.BytesIO(base64.b64decode(data, validate=True))).load()
+                checked += 1
+    assert checked, "no animation frame found"
+
+
 # The fallback reads the notebook as saved -------------------------------------------------------------------
 def _text(output) -> str:
     if output.get("output_type") == "stream":

@@ -111,6 +111,8 @@ class CheckReport:
     package: Path
     rows: list[CheckRow]
     results: list = field(default_factory=list, repr=False)
+    #: Show what the code printed under passing tests too (failing ones always show it).
+    show_output: bool = False
     _shown: bool = field(default=False, repr=False)
 
     @property
@@ -151,7 +153,7 @@ class CheckReport:
         width = width or shutil.get_terminal_size((100, 24)).columns
         lines = [self.header()]
         for row in self.rows:
-            lines.append(format_row(row, color, width))
+            lines.append(format_row(row, color, width, self.show_output))
         lines.append(self.summary())
         return "\n".join(lines)
 
@@ -184,7 +186,7 @@ class CheckReport:
                                f'src="data:image/png;base64,{data}">')
                 except Exception as exc:  # a picture must never hide the message
                     picture = f"<br><i>(the picture could not be drawn: {html.escape(str(exc))})</i>"
-            message = html.escape(student_message(row))
+            message = html.escape(student_message(row, self.show_output))
             out.append(
                 "<tr>"
                 f'<td style="{cell}">{badge}</td>'
@@ -243,8 +245,9 @@ def command_name(command: str) -> str:
     return f"{'bash run.sh' if in_student_edition() else 'grader'} {command}"
 
 
-def student_message(row: CheckRow) -> str:
-    """The row's message in a student's words (a stub names the function to write)."""
+def student_message(row: CheckRow, show_output: bool = False) -> str:
+    """The row's message in a student's words (a stub names the function to write), and
+    what the code printed when the test did not pass (or ``show_output``)."""
     message = row.message.strip()
     if row.status == "not_implemented":
         match = NOT_IMPLEMENTED.match(message)
@@ -261,20 +264,21 @@ def student_message(row: CheckRow) -> str:
         return message if "not implemented yet" in message else f"not implemented yet: {message}"
     if not message:
         message = STATUS_WORDS.get(row.status, row.status)
-    if row.output.strip():
+    if row.output.strip() and (show_output or not row.passed):
         message += "\nyour code printed:\n" + row.output.rstrip()
     return message
 
 
-def format_row(row: CheckRow, color: bool = False, width: int = 100) -> str:
-    """One test as a block of plain text: label, points, title, then the message."""
+def format_row(row: CheckRow, color: bool = False, width: int = 100, show_output: bool = False) -> str:
+    """One test as a block of plain text: label, points, title, then the message (see
+    :func:`student_message` for ``show_output``)."""
     label = row.label
     ansi = LABELS.get(row.status, ("", "", "0"))[2]
     shown_label = f"\033[1;{ansi}m{label:<9}\033[0m" if color else f"{label:<9}"
     points = f"{_points(row.score)}/{_points(row.points)}"
     lines = [f"{shown_label} {points:>7}  {row.title}  [{row.name}]"]
     indent = " " * 19
-    body = student_message(row).splitlines() or [""]
+    body = student_message(row, show_output).splitlines() or [""]
     for line in body:
         wrapped = textwrap.wrap(line, width=max(40, width - len(indent)), break_long_words=False,
                                 break_on_hyphens=False, replace_whitespace=False) or [""]
@@ -397,7 +401,7 @@ def _in_notebook() -> bool:
 
 
 def check(exercise: str | None = None, package: str | Path | None = None, show: bool = True, *,
-          figures: str | Path | None = None) -> CheckReport:
+          figures: str | Path | None = None, show_output: bool = False) -> CheckReport:
     """Run the public tests of an exercise on your code and show what happened.
 
     Parameters
@@ -414,6 +418,9 @@ def check(exercise: str | None = None, package: str | Path | None = None, show: 
         as PNG files) elsewhere.
     figures : str or Path, optional
         Where to save pictures outside a notebook (default ``<temp>/check-figures``).
+    show_output : bool
+        Also show what your code printed during tests that passed (a failing test
+        always shows it, cut after a few dozen lines).
 
     Returns
     -------
@@ -426,6 +433,7 @@ def check(exercise: str | None = None, package: str | Path | None = None, show: 
         For an unknown exercise or when no package is found.
     """
     report = run_check(exercise, package)
+    report.show_output = show_output
     if show:
         if _in_notebook():
             from IPython.display import HTML, display
@@ -453,6 +461,9 @@ def add_check_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentPar
     parser.add_argument("--package", metavar="PATH", default=None,
                         help=f"the package to check (default: ./exercises, or ${PACKAGE_VARIABLE}); "
                              "'solutions' checks the reference")
+    parser.add_argument("--show-output", action="store_true",
+                        help="also show what your code printed during tests that passed (failing tests always "
+                             "show it)")
     parser.add_argument("--figures", metavar="DIR", default=None,
                         help=f"where to save pictures of failing cases (default: <temp>/{FIGURES_FOLDER})")
     return parser
@@ -474,7 +485,7 @@ def main_check(args: argparse.Namespace) -> int:
     figures = getattr(args, "figures", None)
     figures_folder = Path(figures) if figures else default_figures_folder()
     exercise = getattr(args, "exercise", None)
-    report = CheckReport(exercise, folder, [])
+    report = CheckReport(exercise, folder, [], show_output=getattr(args, "show_output", False))
     print(report.header(len(tests)), file=out, flush=True)
     width = shutil.get_terminal_size((100, 24)).columns
 
@@ -482,7 +493,7 @@ def main_check(args: argparse.Namespace) -> int:
         row = row_of(result)
         save_row_figure(row, figures_folder)
         report.rows.append(row)
-        print(format_row(row, color, width), file=out, flush=True)
+        print(format_row(row, color, width, report.show_output), file=out, flush=True)
 
     from .run import run_tests
 

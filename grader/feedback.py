@@ -19,8 +19,8 @@ which counts the tests not shown, and says so.  Leaderboard values appear only f
 leaderboard columns of tests shown.
 
 For each test shown: its title, status, points, what the test found (the message and
-the speed and error figures), what the student's code printed, and the picture of a
-failing case.  Everything read from the results file is escaped; the page is
+the speed and error figures), what the student's code printed (under a test that did
+not pass), and the picture of a failing case.  Everything read from the results file is escaped; the page is
 self-contained (styles inline, pictures as base64 PNG, no JavaScript).
 
 Feedback never goes back: a page records what it releases in a tag
@@ -114,7 +114,7 @@ def _test_row(entry: dict) -> str:
         if metrics:
             parts.append(f"<pre>{_e(chr(10).join(metrics))}</pre>")
         printed = extra.get("printed")
-        if isinstance(printed, str) and printed.strip():
+        if isinstance(printed, str) and printed.strip() and status != "passed":
             parts.append(f"<p class='muted'>Your code printed:</p><pre>{_e(printed.rstrip())}</pre>")
     else:  # results written before messages were kept apart: the whole text
         text = output_text(entry).strip()

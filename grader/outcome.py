@@ -20,8 +20,14 @@ STATUS_MEANINGS = {
 STATUSES = tuple(STATUS_MEANINGS)
 #: Characters of a message kept; longer ones are cut (the parent never stores more).
 MESSAGE_LIMIT = 20_000
-#: Characters of what the student's code printed kept per test.
-OUTPUT_LIMIT = 4_000
+#: What the student's code printed kept per test: at most this many characters ...
+OUTPUT_LIMIT = 2_000
+#: ... and lines (a debug print in a loop must not bury the table), then a marker
+#: "[... N more characters not shown]".
+OUTPUT_LINES = 30
+#: Room for that marker: printed output read back from a results file is at most
+#: OUTPUT_LIMIT + OUTPUT_MARKER_ROOM characters.
+OUTPUT_MARKER_ROOM = 64
 
 
 def capped(text: str, limit: int) -> str:
@@ -29,7 +35,26 @@ def capped(text: str, limit: int) -> str:
     text = str(text)
     if len(text) <= limit:
         return text
-    return text[:limit] + f"\n[... {len(text) - limit} more characters not shown]"
+    return text[:limit] + not_shown(len(text) - limit)
+
+
+def not_shown(count: int) -> str:
+    """The marker put where ``count`` characters were cut."""
+    return f"\n[... {count} more characters not shown]"
+
+
+def capped_output(text: str, dropped: int = 0) -> str:
+    """What a test's code printed, cut to OUTPUT_LINES lines and OUTPUT_LIMIT characters;
+    the marker counts the characters left out, ``dropped`` (cut earlier) included."""
+    lines = text.splitlines(keepends=True)
+    if len(lines) > OUTPUT_LINES:
+        kept = "".join(lines[:OUTPUT_LINES])
+        dropped += len(text) - len(kept)
+        text = kept
+    if len(text) > OUTPUT_LIMIT:
+        dropped += len(text) - OUTPUT_LIMIT
+        text = text[:OUTPUT_LIMIT]
+    return text.rstrip("\n") + not_shown(dropped) if dropped else text
 
 
 @dataclass
@@ -89,7 +114,7 @@ class Outcome:
         metrics = data.get("metrics")
         return cls(status, fraction, capped(data.get("message", "") or "", MESSAGE_LIMIT),
                    figure if isinstance(figure, dict) else None, metrics if isinstance(metrics, dict) else {},
-                   capped(data.get("output", "") or "", OUTPUT_LIMIT))
+                   capped(data.get("output", "") or "", OUTPUT_LIMIT + OUTPUT_MARKER_ROOM))
 
 
 class StudentCallFailed(Exception):

@@ -13,6 +13,7 @@ from hypothesis import HealthCheck, Phase, find, settings
 from hypothesis.errors import NoSuchExample
 
 from .outcome import StudentCallFailed
+from .student import output_of_the_case_found
 
 #: No "explain" phase: it re-runs the student's code many times to annotate the example.
 SHRINK_SETTINGS = settings(database=None, derandomize=True, max_examples=60, deadline=None,
@@ -24,6 +25,8 @@ def smallest_failure(strategy, is_wrong):
 
     A call that raises in the student's code counts as wrong (StudentCallFailed); a
     stopped call (not implemented, timeout, crash) propagates and ends the search.
+    What the examples tried printed is set aside: when one is found, the test's output
+    is what its code prints when the test runs that example again.
     """
     def wrong(example) -> bool:
         try:
@@ -31,7 +34,10 @@ def smallest_failure(strategy, is_wrong):
         except StudentCallFailed:
             return True
 
-    try:
-        return find(strategy, wrong, settings=SHRINK_SETTINGS)
-    except NoSuchExample:
-        return None
+    with output_of_the_case_found() as search:
+        try:
+            example = find(strategy, wrong, settings=SHRINK_SETTINGS)
+        except NoSuchExample:
+            return None
+        search["found"] = True
+        return example

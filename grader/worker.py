@@ -36,6 +36,8 @@ import traceback
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUTPUT_LIMIT = 8_000  # characters of printed output kept per call
+#: The first line of the message of a batch call that raised: which case raised.
+BATCH_CASE = "[batch case {}]\n"
 MESSAGE_LIMIT = 8_000  # characters of an error message kept
 
 
@@ -158,23 +160,27 @@ class Worker:
                     "message": f"could not build the inputs with your exercises package: {short_traceback(exc)}"}
         real = sys.stdout, sys.stderr
         sys.stdout = sys.stderr = captured
+        value = []
         try:
             if request.get("batch"):
                 # args is a list of argument lists: one call each, values in order.
-                value = [target(*one, **kwargs) for one in args]
+                for one in args:
+                    value.append(target(*one, **kwargs))
             else:
                 for _ in range(int(request.get("repeat", 1))):
                     value = target(*args, **kwargs)
         except NotImplementedError as exc:
             return {"status": "not_implemented", "message": capped(stub_named(exc))}
         except RecursionError as exc:
-            return {"status": "error", "message": "recursion limit reached: " + short_traceback(exc)}
+            case = BATCH_CASE.format(len(value)) if request.get("batch") else ""
+            return {"status": "error", "message": case + "recursion limit reached: " + short_traceback(exc)}
         except MemoryError:
             return {"status": "error", "message": "ran out of memory (MemoryError)"}
         except SystemExit as exc:
             return {"status": "error", "message": capped(f"called sys.exit({exc.code!r}) inside an exercise")}
         except BaseException as exc:
-            return {"status": "error", "message": short_traceback(exc)}
+            case = BATCH_CASE.format(len(value)) if request.get("batch") else ""
+            return {"status": "error", "message": case + short_traceback(exc)}
         finally:
             sys.stdout, sys.stderr = real
         try:

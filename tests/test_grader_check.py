@@ -14,6 +14,7 @@ import re
 import shutil
 import subprocess
 import sys
+import textwrap
 import types
 from pathlib import Path
 
@@ -45,6 +46,102 @@ def wrong_package(tmp_path_factory) -> Path:
     assert buggy != source, "the reference changed: update the bug planted by this test"
     module.write_text(buggy)
     return root
+
+
+def plant(path: Path, function: str, lines: str, old: str = "", new: str = "") -> None:
+    """Put ``lines`` at the start of ``function``'s solution block in ``path`` (and
+    replace ``old`` by ``new``)."""
+    source = path.read_text()
+    start = source.index("    ### BEGIN SOLUTION", source.index(f"def {function}("))
+    changed = source[:start] + textwrap.indent(textwrap.dedent(lines), "    ") + source[start:]
+    if old:
+        assert old in changed, "the reference changed: update the bug planted by this test"
+        changed = changed.replace(old, new)
+    path.write_text(changed)
+
+
+#: What the printing collide_circle_circle prints per call after its first line.
+DEBUG_LINES = 50
+
+
+@pytest.fixture(scope="module")
+def printing_package(tmp_path_factory) -> Path:
+    """The reference with debug prints: collide_circle_circle prints its case and 50
+    lines and flips the normal; collide_circle_polygon prints its radius and raises on a
+    radius above 0.6; clip_segment_to_half_plane prints and is right; aabbs_overlap
+    raises on a box wider than 1.5 m."""
+    root = tmp_path_factory.mktemp("printing")
+    shutil.copytree(REPO / "solutions", root / "exercises", ignore=shutil.ignore_patterns("__pycache__"))
+    narrowphase = root / "exercises" / "narrowphase"
+    plant(narrowphase / "circle_circle.py", "collide_circle_circle", f"""\
+        print(f"CASE {{a.center[0]:g}} {{a.center[1]:g}} {{a.radius:g}} {{b.center[0]:g}} {{b.center[1]:g}} {{b.radius:g}}")
+        for step in range({DEBUG_LINES}):
+            print("debug step", step)
+        """, "return Contact(normal, reach - distance", "return Contact(-normal, reach - distance")
+    plant(narrowphase / "circle_polygon.py", "collide_circle_polygon", """\
+        print("radius", circle.radius)
+        if circle.radius > 0.6:
+            raise ValueError("a big circle")
+        """)
+    plant(narrowphase / "polygon_polygon.py", "clip_segment_to_half_plane", 'print("CLIP-DEBUG")\n')
+    plant(narrowphase / "aabb_aabb.py", "aabbs_overlap", """\
+        if a.max_corner[0] - a.min_corner[0] > 1.5:
+            raise ValueError("too wide")
+        """)
+    return root
+
+
+@pytest.fixture(scope="module")
+def printing_report(printing_package):
+    return check("contacts", package=printing_package, show=False)
+
+
+def test_printed_output_is_capped_and_is_what_the_case_shown_printed(printing_report):
+    from grader.outcome import OUTPUT_LINES
+
+    row = next(r for r in printing_report.rows if r.name == "contacts.circle_circle")
+    assert row.status == "failed" and "a small case found by Hypothesis" in row.message
+    # The output is the shrunk case's own: its first line names the circles the message shows.
+    first, *rest = row.output.splitlines()
+    numbers = first.split()[1:]
+    circles = re.findall(r"Circle\(center=\(([-\d.e]+), ([-\d.e]+)\), radius=([-\d.e]+)\)", row.message)
+    assert [float(v) for v in numbers] == [float(v) for circle in circles for v in circle], (first, row.message)
+    # One case printed 1 + DEBUG_LINES lines: OUTPUT_LINES are shown, the rest counted.
+    printed = first + "\n" + "".join(f"debug step {i}\n" for i in range(DEBUG_LINES))
+    shown = "".join(printed.splitlines(keepends=True)[:OUTPUT_LINES])
+    assert rest[:OUTPUT_LINES - 1] == shown.splitlines()[1:]
+    assert rest[-1] == f"[... {len(printed) - len(shown)} more characters not shown]", rest[-3:]
+    text = check_module.format_row(row)
+    assert "your code printed:" in text and text.count("debug step") == OUTPUT_LINES - 1
+
+
+def test_a_hypothesis_test_shows_what_its_failing_example_printed(printing_report):
+    row = next(r for r in printing_report.rows if r.name == "contacts.centre_inside")
+    assert row.status == "error" and "a big circle" in row.message
+    # Every example printed a line; only the failing (shrunk) example's is kept.
+    assert row.output.splitlines() == ["radius 0.61"], row.output
+    assert "radius=0.61" in row.message  # the case that raised
+
+
+def test_output_of_passing_tests_is_shown_on_request_only(printing_package, printing_report, capsys):
+    row = next(r for r in printing_report.rows if r.name == "contacts.clip_segment")
+    assert row.passed and row.output.startswith("CLIP-DEBUG")
+    assert "CLIP-DEBUG" not in check_module.format_row(row) and "CLIP-DEBUG" not in printing_report.html()
+    assert "CLIP-DEBUG" in check_module.format_row(row, show_output=True)
+    arguments = ["contacts.clip_segment", "--package", str(printing_package)]
+    assert main(arguments) == 0 and "CLIP-DEBUG" not in capsys.readouterr().out
+    assert main(arguments + ["--show-output"]) == 0 and "your code printed:\n" in capsys.readouterr().out.replace(
+        " " * 19, "")
+
+
+def test_a_random_case_that_raises_is_named_with_its_input(printing_package):
+    report = check("sat.aabbs_overlap", package=printing_package, show=False)
+    [row] = report.rows
+    assert row.status == "error" and "too wide" in row.message
+    named = re.search(r"on the case aabbs_overlap\(AABB\(min_corner=\(([-\d.e]+), [-\d.e]+\), "
+                      r"max_corner=\(([-\d.e]+), [-\d.e]+\)\)", row.message)
+    assert named, row.message
+    assert float(named[2]) - float(named[1]) > 1.5, "the case named is not one that raises"
 
 
 def png_pixels(data: bytes) -> np.ndarray:

@@ -6,6 +6,9 @@
 #   bash run.sh setup   only create .venv and install the pinned dependencies, Chromium
 #                       and the book's MathJax
 #   bash run.sh bench   only the benchmarks (add --quick for a short run)
+#   bash run.sh release-check   (root) the Gradescope autograder built by its own setup.sh
+#                       in a fresh Debian root file system, grading three submissions two
+#                       ways in (bubblewrap, and the plain fallback); about 4 minutes
 set -euo pipefail
 cd "$(dirname "$0")"
 VENV=.venv
@@ -88,8 +91,12 @@ case "$command" in
         COURSE_RELEASE_VENV="${COURSE_RELEASE_VENV:-1}" \
             "$PY" -m pytest -n 2 --dist loadgroup --doctest-modules solutions tools tests "$@"
         ;;
+    release-check)
+        setup
+        "$PY" -m tools.release_check "$@"
+        ;;
     *)
-        echo "unknown command '$command': use main, test, setup or bench" >&2
+        echo "unknown command '$command': use main, test, setup, bench or release-check" >&2
         exit 2
         ;;
 esac

@@ -162,3 +162,20 @@ def test_student_report_of_results_written_by_the_grader(tmp_path):
 def test_student_report_of_a_missing_file(tmp_path):
     page = write_student_report(tmp_path / "nothing.json", tmp_path / "r.html").read_text()
     assert "missing or cannot be read" in page
+
+
+def test_the_isolation_used_is_shown_and_a_plain_fallback_stands_out(tmp_path):
+    test = spec.TestSpec("contacts.circle_circle", "contacts", "Two circles", 2.0, "visible")
+    outcomes = [run.TestResult(test, Outcome.passed("ok"), 0.1)]
+    for name, isolation in (("a", "bwrap"), ("b", "plain"), ("c", "plain"), ("d", None)):
+        write_results(build_results(outcomes, 1.0, submission_id=name, isolation=isolation),
+                      tmp_path / name / "results.json")
+    assert "isolation: bubblewrap" in write_student_report(tmp_path / "a" / "results.json",
+                                                           tmp_path / "a" / "report.html").read_text()
+    plain = write_student_report(tmp_path / "b" / "results.json", tmp_path / "b" / "report.html").read_text()
+    assert "isolation: plain" in plain and "bubblewrap could not start" in plain
+    assert "isolation" not in write_student_report(tmp_path / "d" / "results.json",
+                                                   tmp_path / "d" / "report.html").read_text().lower()
+    page = write_class_report(tmp_path).read_text()
+    assert "2 graded with isolation: plain" in page and "1 graded with isolation: bubblewrap" in page
+    assert "class='warning'>2 graded with isolation: plain" in page

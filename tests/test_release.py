@@ -157,13 +157,14 @@ def test_student_folder_layout(release):
         assert (student / name).is_file(), name
     assert os.access(student / "run.sh", os.X_OK)
     if (REPO / "exercises" / ".generated.json").is_file():
-        assert (student / "exercises" / ".generated.json").read_bytes() == (
-            REPO / "exercises" / ".generated.json").read_bytes()
-    # Every repository module of exercises/ is there, byte for byte.
+        record = json.loads((student / "exercises" / ".generated.json").read_text())
+        assert record.keys() == json.loads((REPO / "exercises" / ".generated.json").read_text()).keys()
+    # Every repository module of exercises/ is there, byte for byte but for the commands
+    # the exercise files name (`bash run.sh check sat` for `grader check sat`).
     for path in (REPO / "exercises").rglob("*.py"):
         if "__pycache__" not in path.parts:
             copy = student / "exercises" / path.relative_to(REPO / "exercises")
-            assert copy.read_bytes() == path.read_bytes(), copy
+            assert copy.read_text().replace("`bash run.sh ", "`grader ") == path.read_text(), copy
     # The grader: exactly the computed whitelist, public tests in, instructor parts out.
     shipped = sorted(p.relative_to(student / "grader").as_posix() for p in (student / "grader").rglob("*")
                      if p.is_file())

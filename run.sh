@@ -8,7 +8,7 @@
 #   bash run.sh bench   only the benchmarks (add --quick for a short run)
 #   bash run.sh release-check   (root) the Gradescope autograder built by its own setup.sh
 #                       in a fresh Debian root file system, grading three submissions two
-#                       ways in (bubblewrap, and the plain fallback); about 4 minutes
+#                       ways in (bubblewrap, and the plain fallback); about 2 minutes
 set -euo pipefail
 cd "$(dirname "$0")"
 VENV=.venv

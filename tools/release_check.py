@@ -109,11 +109,13 @@ def machine_network_settings(image: Path) -> None:
 def mounted(image: Path):
     """/proc, /dev and /sys of the host in the image (for the chroot way in)."""
     targets = []
+    locks = uid_locks()
     try:
         for kind, source, target, options in (("proc", "proc", "proc", []), ("bind", "/dev", "dev", []),
-                                              ("bind", "/sys", "sys", ["-o", "ro"])):
+                                              ("bind", "/sys", "sys", ["-o", "ro"]),
+                                              ("bind", str(locks), str(locks).lstrip("/"), [])):
             path = image / target
-            path.mkdir(exist_ok=True)
+            path.mkdir(parents=True, exist_ok=True)
             if kind == "proc":
                 run(["mount", "-t", "proc", "proc", str(path)])
             else:
@@ -126,6 +128,19 @@ def mounted(image: Path):
             subprocess.run(["umount", "-R", "-l", str(path)], stderr=subprocess.DEVNULL)
 
 
+def uid_locks() -> Path:
+    """This machine's registry of sandbox users (grader.sandbox), shared with the image:
+    its processes are this machine's, and a grader outside (a test run, a batch) that
+    did not see the image's locks would take its sandboxes' users for strays and kill
+    them."""
+    from grader.sandbox import uid_lock_folder
+
+    folder = uid_lock_folder()
+    if folder is None:
+        raise CheckError("no safe folder for the sandbox users' locks here (see grader.sandbox.uid_lock_folder)")
+    return folder
+
+
 def inside(image: Path, way: str, script: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
     """Run ``bash -c script`` as root inside the image, entered ``way`` (bwrap or chroot)."""
     variables = {"PATH": "/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin", "HOME": "/root",
@@ -136,7 +151,8 @@ def inside(image: Path, way: str, script: str, env: dict[str, str] | None = None
         # A mount namespace with the image as its root (pivot_root, as container runtimes
         # do): the grader's own bubblewrap can then make its sandboxes inside.
         entry = ["bwrap", "--cap-add", "ALL", "--bind", str(image), "/", "--proc", "/proc", "--dev", "/dev",
-                 "--ro-bind", "/sys", "/sys", "--tmpfs", "/tmp", "--die-with-parent", "--", "env", "-i"]
+                 "--ro-bind", "/sys", "/sys", "--tmpfs", "/tmp", "--bind", str(uid_locks()), str(uid_locks()),
+                 "--die-with-parent", "--", "env", "-i"]
         return subprocess.run(entry + command, capture_output=True, text=True)
     with mounted(image):
         return subprocess.run(["chroot", str(image), "env", "-i"] + command, capture_output=True, text=True)

@@ -109,6 +109,13 @@ def run_sh_cases(path: Path) -> set[str]:
     return cases
 
 
+def student_run_sh() -> Path:
+    """The student edition's run.sh: the one run.sh among the grader's release files."""
+    found = sorted(REPO.glob("grader/**/run.sh"))
+    assert len(found) == 1, f"expected one student edition run.sh under grader/, found {found}"
+    return found[0]
+
+
 def grader_subcommands() -> set[str]:
     """The subcommands of the parser behind the `grader` console script."""
     scripts = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))["project"]["scripts"]
@@ -197,10 +204,11 @@ def exists(word: str) -> bool:
 def stale_commands(snippets) -> list[str]:
     """Every shown command that does not exist, as 'file:line: snippet: why'."""
     problems = []
-    repository_run, student_run = run_sh_cases(REPO / "run.sh"), run_sh_cases(
-        REPO / "grader" / "release_files" / "run.sh")
+    student_sh = student_run_sh()
+    repository_run, student_run = run_sh_cases(REPO / "run.sh"), run_sh_cases(student_sh)
     for snippet, command in shown_run_sh(snippets):
-        cases, which = (student_run, "grader/release_files/run.sh") if snippet.student else (repository_run, "run.sh")
+        cases, which = (student_run, student_sh.relative_to(REPO).as_posix()) if snippet.student else (
+            repository_run, "run.sh")
         if command not in cases:
             problems.append(f"{snippet.where()}: no command '{command}' in {which} ({', '.join(sorted(cases))})")
     everything, student = grader_subcommands(), student_edition_commands()

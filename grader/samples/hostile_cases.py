@@ -758,12 +758,14 @@ SIZES = (
         expect=(Expect(INELASTIC - BAD_INPUT, ERROR, ("larger than the grader accepts",)),)),
     HostileCase(
         "hostile-huge-trajectory", "hostile",
-        "body.py wraps Body.circle so that, once the scene driver runs (it builds its balls with it), the "
-        "driver is replaced by one returning a trajectory of 2,000 balls per step instead of its 16 (about 5 MB, "
-        "under the 16 MiB the grader reads).",
-        appends=(("body", '''
+        "response/impulse.py (an exercise file: library files are the course's) wraps Body.circle so that, once "
+        "the scene driver runs (it builds its balls with it), the driver is replaced by one returning a "
+        "trajectory of 2,000 balls per step instead of its 16 (about 5 MB, under the 16 MiB the grader reads).",
+        appends=(("response.impulse", '''
 
 import sys as _sys
+
+from exercises.body import Body
 
 
 def _enormous(steps=120, *args, **kwargs):

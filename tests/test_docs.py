@@ -17,6 +17,8 @@ blocks are examples of code, not commands):
   (``DIR/results.json``, ``PATH/TO/exercises``) is skipped, ``<...>`` and ``*`` are
   globs that must match something; absolute paths and :data:`OUTPUTS` (what commands
   write) are not looked for;
+- a dotted name of the project's packages (``grader.credit.check_cases``, ``from X import
+  Y``): a module, or an attribute of one;
 - a Markdown link to a local file: the file exists, and its ``#anchor`` is a heading of it;
 - README.md is at most :data:`README_MAX_LINES` lines.
 """
@@ -228,6 +230,42 @@ def stale_commands(snippets) -> list[str]:
     return problems
 
 
+DOTTED = re.compile(r"\b((?:grader|solutions|exercises|tools)(?:\.\w+)+)(?![\w/-])")
+FROM_IMPORT = re.compile(r"\bfrom\s+([\w.]+)\s+import\s+(\w+(?:\s*,\s*\w+)*)")
+
+
+def resolves(name: str) -> bool:
+    """A dotted name is a module, or an attribute of the longest module it starts with."""
+    parts = name.split(".")
+    for cut in range(len(parts), 0, -1):
+        try:
+            spec = importlib.util.find_spec(".".join(parts[:cut]))
+        except (ImportError, ValueError):   # a parent that is a module, not a package
+            spec = None
+        if spec is None:
+            continue
+        thing = importlib.import_module(".".join(parts[:cut]))
+        for attribute in parts[cut:]:
+            if not hasattr(thing, attribute):
+                return False
+            thing = getattr(thing, attribute)
+        return True
+    return False
+
+
+def shown_names(snippets):
+    """Dotted names of the project's packages, and what ``from X import Y`` imports."""
+    found = [(s, m[1]) for s in snippets for m in DOTTED.finditer(s.text)]
+    found += [(s, f"{m[1]}.{name.strip()}") for s in snippets for m in FROM_IMPORT.finditer(s.text)
+              for name in m[2].split(",")]
+    return found
+
+
+def stale_names(snippets) -> list[str]:
+    return [f"{s.where()}: {name} is neither a module nor in one" for s, name in shown_names(snippets)
+            if not resolves(name)]
+
+
 def stale_paths(snippets) -> list[str]:
     return [f"{s.where()}: {word} does not exist" for s in snippets for word in path_words(s) if not exists(word)]
 
@@ -274,6 +312,11 @@ def test_every_path_shown_exists():
     assert not problems, "\n".join(problems)
 
 
+def test_every_module_and_function_named_exists():
+    problems = stale_names(all_snippets())
+    assert not problems, "\n".join(problems)
+
+
 @pytest.mark.parametrize("path", doc_files(), ids=lambda p: p.name)
 def test_every_link_leads_somewhere(path):
     problems = stale_links(path)
@@ -303,6 +346,17 @@ def test_a_stale_command_is_caught(text, student, stale):
 ])
 def test_a_stale_path_is_caught(text, stale):
     problems = stale_paths([Snippet(REPO / "README.md", 1, text, False)])
+    assert len(problems) == 1 and stale in problems[0], problems
+
+
+@pytest.mark.parametrize("text, stale", [
+    ("grader.credit.check_everything(...)", "grader.credit.check_everything"),
+    ("grader.sandboxing.run", "grader.sandboxing.run"),
+    ("from solutions.narrowphase.circle_circle import collide_circles", "circle_circle.collide_circles"),
+    ("from grader import check, submit_all", "grader.submit_all"),
+])
+def test_a_stale_name_is_caught(text, stale):
+    problems = stale_names([Snippet(REPO / "README.md", 1, text, False)])
     assert len(problems) == 1 and stale in problems[0], problems
 
 

@@ -7,7 +7,7 @@ Submissions are copies of the reference engine (``solutions/`` handed in as
 test stops at the first call), half each; the reference copies are folders, the stubs
 zips, so extraction is timed too.  Prints
 
-- the wall-clock and processor seconds of ``python -m grader.grade`` on one
+- the wall-clock and processor seconds of ``python -m grader.batch.grade`` on one
   submission (process start, collecting the graded tests, worker start, every public
   and hidden test), reference and stubs;
 - a class of ``--count`` submissions at ``--jobs``: total seconds against the goal
@@ -38,7 +38,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from grader.grade import grade_submissions  # noqa: E402
+from grader.batch.grade import grade_submissions  # noqa: E402
 
 GOAL_PROCESSOR_SECONDS = 3.0
 GOAL_CLASS_SECONDS_PER_100 = 180.0
@@ -68,9 +68,9 @@ def children_seconds() -> float:
 
 
 def one_submission(submission: Path, out: Path) -> tuple[float, float]:
-    """(wall, processor) seconds of one `python -m grader.grade` run."""
+    """(wall, processor) seconds of one `python -m grader.batch.grade` run."""
     started, processor = time.perf_counter(), children_seconds()
-    subprocess.run([sys.executable, "-m", "grader.grade", str(submission), "--out", str(out), "--jobs", "1",
+    subprocess.run([sys.executable, "-m", "grader.batch.grade", str(submission), "--out", str(out), "--jobs", "1",
                     "--no-progress", "--no-html"], cwd=REPO, check=True, stdout=subprocess.DEVNULL)
     return time.perf_counter() - started, children_seconds() - processor
 
@@ -91,7 +91,7 @@ def main(argv=None) -> int:
         scratch = Path(scratch)
         reference = folder_copy(REPO / "solutions", scratch / "one" / "reference")
         stubs = zip_copy(REPO / "exercises", scratch / "one" / "stubs.zip")
-        print("\none submission, `python -m grader.grade` end to end (a new process: imports and test "
+        print("\none submission, `python -m grader.batch.grade` end to end (a new process: imports and test "
               "collection included)")
         for name, submission in (("reference", reference), ("stubs", stubs)):
             wall, processor = one_submission(submission, scratch / f"out-{name}")

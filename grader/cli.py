@@ -16,23 +16,23 @@ import sys
 
 #: subcommand -> (module, add-arguments function, main function, help)
 SUBCOMMANDS = {
-    "check": ("grader.check", "add_check_arguments", "main_check", "run the public tests of an exercise"),
-    "grade": ("grader.grade", "add_grade_arguments", "main_grade", "grade a class of submissions"),
-    "gradescope-zip": ("grader.gradescope", "add_gradescope_arguments", "main_gradescope_zip",
+    "check": ("grader.student.check", "add_check_arguments", "main_check", "run the public tests of an exercise"),
+    "grade": ("grader.batch.grade", "add_grade_arguments", "main_grade", "grade a class of submissions"),
+    "gradescope-zip": ("grader.release.gradescope", "add_gradescope_arguments", "main_gradescope_zip",
                        "build autograder.zip for Gradescope"),
     "example-class": ("grader.samples.example_class", "add_example_class_arguments", "main_example_class",
                       "write the bundled example class of submissions"),
-    "similarity": ("grader.similarity", "add_similarity_arguments", "main_similarity", "flag nearly identical code"),
-    "submit": ("grader.submit", "add_submit_arguments", "main_submit", "write the zip to hand in (with a manifest)"),
-    "update": ("grader.update", "add_update_arguments", "main_update",
+    "similarity": ("grader.batch.similarity", "add_similarity_arguments", "main_similarity", "flag nearly identical code"),
+    "submit": ("grader.student.submit", "add_submit_arguments", "main_submit", "write the zip to hand in (with a manifest)"),
+    "update": ("grader.student.update", "add_update_arguments", "main_update",
                "take a corrected release of the course into this folder, keeping your work"),
-    "release": ("grader.release", "add_release_arguments", "main_release",
+    "release": ("grader.release.edition", "add_release_arguments", "main_release",
                 "write the student edition and the Gradescope autograder"),
 }
 
 
 def list_tests(args) -> int:
-    from .spec import load_spec
+    from .harness.spec import load_spec
 
     tests = load_spec()
     width = max(len(t.name) for t in tests)
@@ -43,7 +43,7 @@ def list_tests(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .check import in_student_edition
+    from .student.check import in_student_edition
 
     # The student edition's README teaches `bash run.sh check`: usage lines say so.
     parser = argparse.ArgumentParser(prog="bash run.sh" if in_student_edition() else "grader",

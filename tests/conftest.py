@@ -1,6 +1,6 @@
 """The project's tests: they import graded test modules (for their strategies), so the
 graded tests' markers are declared here too."""
-from grader.plugin import register_markers
+from grader.harness.plugin import register_markers
 
 
 def pytest_configure(config):

@@ -5,7 +5,7 @@ blocks are examples of code, not commands):
 
 - ``bash run.sh X``: a case ``X)`` of the repository's ``run.sh``, or, under a heading
   that names students (or any heading above it does: "Students", "The student
-  edition's notebooks"), of the student edition's ``grader/release_files/run.sh``;
+  edition's notebooks"), of the student edition's ``grader/release/files/run.sh``;
 - ``grader X``, ``.venv/bin/grader X``, ``python -m grader X``: a subcommand of the
   ``grader`` console script's parser (the module named in ``pyproject.toml``), and under
   a student heading one the student edition keeps (``STUDENT_COMMANDS``, and ``list``);
@@ -17,7 +17,7 @@ blocks are examples of code, not commands):
   (``DIR/results.json``, ``PATH/TO/exercises``) is skipped, ``<...>`` and ``*`` are
   globs that must match something; absolute paths and :data:`OUTPUTS` (what commands
   write) are not looked for;
-- a dotted name of the project's packages (``grader.credit.check_cases``, ``from X import
+- a dotted name of the project's packages (``grader.harness.credit.check_cases``, ``from X import
   Y``): a module, or an attribute of one;
 - a Markdown link to a local file: the file exists, and its ``#anchor`` is a heading of it;
 - README.md is at most :data:`README_MAX_LINES` lines.
@@ -326,7 +326,7 @@ def test_every_link_leads_somewhere(path):
 @pytest.mark.parametrize("text, student, stale", [
     ("bash run.sh benchmark", False, "no command 'benchmark' in run.sh"),
     ("bash run.sh lab", False, "no command 'lab' in run.sh"),               # a student command, instructor's page
-    ("bash run.sh release-check", True, "in grader/release_files/run.sh"),  # and the other way round
+    ("bash run.sh release-check", True, "in grader/release/files/run.sh"),  # and the other way round
     (".venv/bin/grader grade-all --out out/x", False, "no subcommand 'grade-all'"),
     (".venv/bin/grader grade CLASS/*.zip --out out/grades", True, "the student edition's grader"),
     (".venv/bin/python -m tools.boook build", False, "tools.boook is not importable"),
@@ -350,7 +350,7 @@ def test_a_stale_path_is_caught(text, stale):
 
 
 @pytest.mark.parametrize("text, stale", [
-    ("grader.credit.check_everything(...)", "grader.credit.check_everything"),
+    ("grader.harness.credit.check_everything(...)", "grader.harness.credit.check_everything"),
     ("grader.sandboxing.run", "grader.sandboxing.run"),
     ("from solutions.narrowphase.circle_circle import collide_circles", "circle_circle.collide_circles"),
     ("from grader import check, submit_all", "grader.submit_all"),

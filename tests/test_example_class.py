@@ -4,7 +4,7 @@ The reference and the stubs are graded with every test (public and hidden) in th
 sandbox, as ``grader grade`` would: the reference gets full marks, the stubs zero with
 every test "not implemented".  Each buggy sample fails exactly the tests its bug should
 fail, each losing at least half its points (a systematic bug must, see
-:mod:`grader.credit`), except the tests it lists as weak, which lose some but less.
+:mod:`grader.harness.credit`), except the tests it lists as weak, which lose some but less.
 
 The reference is graded as the probe (:func:`grader.samples.example_class.grade_probe`): the
 reference with each exercise function printing its code when it runs, which changes no
@@ -28,10 +28,10 @@ from grader.samples.example_class import (ABOUT_FILE, BUGGY_SAMPLES, ERRATA, EXE
                                   build_buggy_sample, build_example_class, build_probe, exercise_functions_flat,
                                   find_function, grade_probe, minimum_points_lost, points_lost, reaching_tests,
                                   sample_functions, sample_problems)
-from grader.outcome import STATUSES, Outcome
-from grader import plugin, spec
-from grader.run import run_tests
-from grader.spec import EXERCISES, load_spec
+from grader.harness.outcome import STATUSES, Outcome
+from grader.harness import plugin, spec
+from grader.harness.run import run_tests
+from grader.harness.spec import EXERCISES, load_spec
 
 #: At least this many buggy samples, covering every exercise.
 MIN_SAMPLES = 25

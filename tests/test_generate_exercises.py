@@ -161,7 +161,7 @@ def test_doctest_imports_point_at_the_student_package():
 
 # Every stub belongs to an exercise; headers and messages say how to check it -----------
 def test_every_stub_of_the_course_names_its_exercise(generated):
-    from grader.spec import EXERCISES  # the names `grader check` takes
+    from grader.harness.spec import EXERCISES  # the names `grader check` takes
 
     _, stubs = generated
     unnamed = [f"{s.module}.{s.qualname}" for s in stubs if s.exercise not in EXERCISES]

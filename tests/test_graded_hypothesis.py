@@ -1,6 +1,6 @@
 """Graded Hypothesis runs draw one fixed sequence of examples, whatever ran before them
 in the process, and leave the process's Hypothesis as they found it; a grading process
-replays the examples of a passing run (grader/replay.py) with the same results.
+replays the examples of a passing run (grader/harness/replay.py) with the same results.
 
 The project's tests grade the example class inside pytest's own process, after other
 property tests; a graded test's examples must not depend on which those were (a buggy
@@ -17,9 +17,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.internal.conjecture import engine, providers
 
-from grader.plugin import HYPOTHESIS_PROFILE, PUBLIC_TESTS, register_hypothesis_profile, restore_hypothesis
-from grader.replay import replaying
-from grader.run import collect
+from grader.harness.plugin import HYPOTHESIS_PROFILE, PUBLIC_TESTS, register_hypothesis_profile, restore_hypothesis
+from grader.harness.replay import replaying
+from grader.harness.run import collect
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -3,7 +3,7 @@
 The graded tests draw their cases from one Hypothesis strategy per category ("boxes
 touching on cell lines", "boxes at negative coordinates"...), and when a student's
 answer is wrong the example shown is the one Hypothesis shrinks to
-(:func:`grader.shrink.smallest_failure`).  A message that says "touching on a cell line"
+(:func:`grader.harness.shrink.smallest_failure`).  A message that says "touching on a cell line"
 must then show boxes touching on a cell line.  Each strategy is checked here against
 its own category, written independently of how it is built: on many drawn examples,
 and on the examples the grader's own shrinking returns for several kinds of wrong
@@ -16,7 +16,7 @@ import itertools
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from grader.shrink import smallest_failure
+from grader.harness.shrink import smallest_failure
 from grader.tests.public import test_grid as grid_tests
 from grader.tests.public import test_quadtree as quadtree_tests
 

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
-from grader.credit import partial_points
-from grader.plugin import spec_of  # noqa: F401  (the module imports without a session)
-from grader.run import run_tests
-from grader.spec import SpecError, load_spec
+from grader.harness.credit import partial_points
+from grader.harness.plugin import spec_of  # noqa: F401  (the module imports without a session)
+from grader.harness.run import run_tests
+from grader.harness.spec import SpecError, load_spec
 
 REPO = Path(__file__).resolve().parent.parent
 

@@ -25,15 +25,15 @@ from types import SimpleNamespace
 import pytest
 
 from grader.errors import GradingError
-from grader.grade import grade_submissions
-from grader.gradebook import spec_hash, write_gradebook
-from grader.outcome import Outcome
-from grader import results as gs_results
-from grader import run as grader_run
-from grader.results import build_results, check_results, leaderboard, plain
-from grader.sandbox import Limits
-from grader.spec import VISIBILITIES, load_spec
-from grader.submissions import (MAX_FILES, Submission, SubmissionPathError, SubmissionRefused, discover,
+from grader.batch.grade import grade_submissions
+from grader.batch.gradebook import spec_hash, write_gradebook
+from grader.harness.outcome import Outcome
+from grader.reports import results as gs_results
+from grader.harness import run as grader_run
+from grader.reports.results import build_results, check_results, leaderboard, plain
+from grader.sandbox.process import Limits
+from grader.harness.spec import VISIBILITIES, load_spec
+from grader.batch.submissions import (MAX_FILES, Submission, SubmissionPathError, SubmissionRefused, discover,
                                 fingerprint, opened, safe_extract, submission_id)
 
 REPO = Path(__file__).resolve().parent.parent
@@ -191,7 +191,7 @@ def test_refused_carol_lists_what_she_handed_in(batch):
 
 # results.json: Gradescope's format -----------------------------------------------------------
 def assert_gradescope_results(data: dict) -> None:
-    """Gradescope's autograder specification, written out independently of grader.results."""
+    """Gradescope's autograder specification, written out independently of grader.reports.results."""
     def number(x):
         return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
 
@@ -293,7 +293,7 @@ def test_a_changed_submission_or_spec_is_graded_again(tmp_path, spec):
 
 
 def run_cli(*args, **kwargs):
-    return subprocess.Popen([sys.executable, "-m", "grader.grade", *map(str, args)], cwd=REPO,
+    return subprocess.Popen([sys.executable, "-m", "grader.batch.grade", *map(str, args)], cwd=REPO,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kwargs)
 
 
@@ -338,10 +338,10 @@ def test_html_reports_are_written_when_grader_report_exists(tmp_path, spec, monk
     def broken(results_path, html_path):
         raise RuntimeError("no report today")
 
-    fake = types.ModuleType("grader.report")
+    fake = types.ModuleType("grader.reports.instructor")
     fake.write_student_report = write_student_report
     fake.write_class_report = lambda out_dir: calls.append(("class", Path(out_dir)))
-    monkeypatch.setitem(sys.modules, "grader.report", fake)
+    monkeypatch.setitem(sys.modules, "grader.reports.instructor", fake)
     submission = folder_submission(tmp_path / "lee")
     out = tmp_path / "out"
     grade_submissions([submission], out, tests=spec[:2], progress=False)
@@ -547,7 +547,7 @@ def test_gradebook_of_an_empty_folder_is_a_header(tmp_path, spec):
 
 
 def test_time_limits_scale_with_the_measured_slowdown(tmp_path, spec, monkeypatch):
-    from grader import calibration, grade
+    from grader.batch import calibration, grade
 
     assert 1.0 <= calibration.slowdown(runs=2) <= calibration.MAX_SLOWDOWN
     monkeypatch.setattr(grade, "slowdown", lambda: 2.0)  # a machine twice as slow as idle

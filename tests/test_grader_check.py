@@ -23,13 +23,14 @@ import matplotlib.image
 import numpy as np
 import pytest
 
-from grader import figures as grader_figures
-from grader.check import CheckError, check, find_package, main, select_tests
-from grader.figures import EXPECTED_COLOR, EXTRA_COLOR, GOT_COLOR, MISSED_COLOR, draw_figure, figure_png_base64, save_figure
+from grader.harness import figures as grader_figures
+from grader.harness.package import PackageNotFound, find_package
+from grader.student.check import CheckError, check, main, select_tests
+from grader.harness.figures import EXPECTED_COLOR, EXTRA_COLOR, GOT_COLOR, MISSED_COLOR, draw_figure, figure_png_base64, save_figure
 from matplotlib.patches import Rectangle
-from grader.spec import load_spec
+from grader.harness.spec import load_spec
 
-check_module = importlib.import_module("grader.check")  # `grader.check` may name the function
+check_module = importlib.import_module("grader.student.check")  # `grader.check` names the function
 REPO = Path(__file__).resolve().parents[1]
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 PUBLIC_EXERCISES = ("momentum", "grid", "quadtree", "sat", "contacts", "impulse")
@@ -97,7 +98,7 @@ def printing_report(printing_package):
 
 
 def test_printed_output_is_capped_and_is_what_the_case_shown_printed(printing_report):
-    from grader.outcome import OUTPUT_LINES
+    from grader.harness.outcome import OUTPUT_LINES
 
     row = next(r for r in printing_report.rows if r.name == "contacts.circle_circle")
     assert row.status == "failed" and "a small case found by Hypothesis" in row.message
@@ -286,10 +287,10 @@ def test_where_the_package_is_found(monkeypatch, tmp_path, wrong_package):
     monkeypatch.setenv(check_module.PACKAGE_VARIABLE, str(REPO / "solutions"))
     assert find_package() == REPO / "solutions"
     assert find_package(wrong_package) == wrong_package / "exercises"  # the argument wins
-    with pytest.raises(CheckError, match="no folder"):
+    with pytest.raises(PackageNotFound, match="no folder"):
         find_package(tmp_path / "missing")
     (tmp_path / "empty").mkdir()
-    with pytest.raises(CheckError, match="no Python package"):
+    with pytest.raises(PackageNotFound, match="no Python package"):
         find_package(tmp_path / "empty")
 
 

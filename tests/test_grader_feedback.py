@@ -1,7 +1,7 @@
 """Student feedback pages (``feedback.html``) that follow Gradescope's visibility, and
 failure pictures in Gradescope's test output.
 
-Results data is built directly (grader.results.build_results on TestResult records, no
+Results data is built directly (grader.reports.results.build_results on TestResult records, no
 sandbox); one end-to-end ``grader grade`` run grades two small folder submissions on the
 momentum tests.
 """
@@ -16,15 +16,15 @@ from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
 
-from grader import results as gs_results
+from grader.reports import results as gs_results
 from grader.cli import main as cli_main
-from grader.spec import load_spec
-from grader.feedback import FEEDBACK_NAME, feedback_html, is_shown, page_level, write_feedback_report
-from grader.outcome import Outcome
-from grader.plugin import TestResult as Result
-from grader.report import write_student_report
-from grader.results import build_results, check_results, results_entry, write_results
-from grader.spec import TestSpec as Spec
+from grader.harness.spec import load_spec
+from grader.reports.feedback import FEEDBACK_NAME, feedback_html, is_shown, page_level, write_feedback_report
+from grader.harness.outcome import Outcome
+from grader.harness.plugin import TestResult as Result
+from grader.reports.instructor import write_student_report
+from grader.reports.results import build_results, check_results, results_entry, write_results
+from grader.harness.spec import TestSpec as Spec
 
 REPO = Path(__file__).resolve().parent.parent
 IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc")

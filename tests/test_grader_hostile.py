@@ -41,15 +41,15 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from grader import codec
+from grader.sandbox import codec
 from grader.samples import hostile_cases as hc
-from grader.grade import grade_submissions
-from grader.gradebook import LOG_NAME, read_grading_log
-from grader.results import check_results, write_results
-from grader.sandbox import (RESPONSE_LIMIT, SANDBOX_UID_BASE, Limits, Sandbox, bwrap_available, processes_of,
+from grader.batch.grade import grade_submissions
+from grader.batch.gradebook import LOG_NAME, read_grading_log
+from grader.reports.results import check_results, write_results
+from grader.sandbox.process import (RESPONSE_LIMIT, SANDBOX_UID_BASE, Limits, Sandbox, bwrap_available, processes_of,
                             stray_processes, uid_in_use)
-from grader.spec import load_spec
-from grader.submissions import (MAX_FILES, Submission, SubmissionRefused, checked_path, discover, fingerprint,
+from grader.harness.spec import load_spec
+from grader.batch.submissions import (MAX_FILES, Submission, SubmissionRefused, checked_path, discover, fingerprint,
                                 opened, scan_folder)
 
 REPO = Path(__file__).resolve().parent.parent
@@ -75,7 +75,7 @@ SIZE_SUBMISSION_SECONDS = 40.0
 #: batch.  Measured: about 130 MiB grading the reference, 450 MiB with the 8,000-ball scene
 #: (parsing its 21 MB answer); a 8,000 x 8,000 distance matrix alone would be 1 GiB.
 PARENT_MEMORY_BYTES = 768 * 1024**2
-#: Longest list a figure kept in results.json may hold (grader.figures.FIGURE_CAPS).
+#: Longest list a figure kept in results.json may hold (grader.harness.figures.FIGURE_CAPS).
 FIGURE_LIST_CAP = 4000
 #: What the hostile cases write (hostile-write-outside appends the first, hostile-write-results
 #: writes the second): a repository file holding one was written by them.
@@ -217,7 +217,7 @@ class PeakMemory:
     """The peak resident memory (VmHWM, bytes) of this process's child processes whose
     command line holds ``pattern`` (the grading workers), polled while in use."""
 
-    def __init__(self, pattern: str = "grader.scheduler"):
+    def __init__(self, pattern: str = "grader.batch.scheduler"):
         self.pattern = pattern
         self.peak = 0
         self.seen: set[int] = set()
@@ -422,7 +422,7 @@ def test_submissions_are_graded_as_they_are_alone(batch, tests, tmp_path):
 
 @needs_sandbox
 def test_the_copy_of_the_reference_is_flagged_and_the_others_are_not(batch, tmp_path):
-    from grader.similarity import REFERENCE_ID, find_similar
+    from grader.batch.similarity import REFERENCE_ID, find_similar
 
     names = ["copy-of-reference", "stubs", "hostile-lying-objects", "hostile-monkeypatch", "zip-cp437-name"]
     flags = {frozenset((p.a.id, p.b.id)) for p in find_similar([batch.paths[n] for n in names], tmp_path)}
@@ -508,7 +508,7 @@ KILL_LAST = ("hostile-sleep", "hostile-ignore-signals")
 
 
 def grade_cli(*args, **kwargs) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "grader.grade", *map(str, args)], cwd=REPO,
+    return subprocess.Popen([sys.executable, "-m", "grader.batch.grade", *map(str, args)], cwd=REPO,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kwargs)
 
 
@@ -567,7 +567,7 @@ def test_a_hostile_batch_killed_at_a_random_point_is_graded_once_on_rerun(tmp_pa
 # Gradescope ------------------------------------------------------------------------------------------
 @needs_sandbox
 def test_gradescope_locks_the_solutions_away_before_grading(tmp_path):
-    from grader.gradescope import build_autograder_zip
+    from grader.release.gradescope import build_autograder_zip
 
     archive = build_autograder_zip(tmp_path / "autograder.zip")
     base = Path(tempfile.mkdtemp(prefix="grader-gradescope-", dir="/tmp"))
@@ -1025,7 +1025,7 @@ def test_a_symbolic_link_anywhere_in_a_submission_is_refused_not_followed(tmp_pa
         with pytest.raises(SubmissionRefused, match=f"the submission '{alias}' is a symbolic link"):
             checked_path(submission.path)
         assert f"the submission '{alias}' is a symbolic link" in refusal(tmp_path / alias)
-    # What grader.similarity reads (verify=False): a link inside is left out, never
+    # What grader.batch.similarity reads (verify=False): a link inside is left out, never
     # followed; a link on the way to the package is refused all the same.
     with opened(discover([tmp_path / "module"])[0], verify=False) as folder:
         assert folder == tmp_path / "module"

@@ -11,11 +11,11 @@ import matplotlib.image
 import numpy as np
 import pytest
 
-from grader.outcome import Outcome
-from grader import run, spec
-from grader.report import CLASS_REPORT_NAME, read_class, speed_points, tally_tests, write_class_report, \
+from grader.harness.outcome import Outcome
+from grader.harness import run, spec
+from grader.reports.instructor import CLASS_REPORT_NAME, read_class, speed_points, tally_tests, write_class_report, \
     write_student_report
-from grader.results import build_results, write_results
+from grader.reports.results import build_results, write_results
 
 PAIRS_FIGURE = {"kind": "pairs", "title": "pairs_grid_every_cell: touching", "cell_size": 1.0,
                 "aabbs": [[0, 0, 1, 1], [1, 0, 2, 1]], "missed": [[0, 1]], "extra": []}
@@ -28,7 +28,7 @@ SHAPES_FIGURE = {"kind": "shapes", "title": "collide_circle_circle", "shapes": [
 def entry(name: str, status: str = "passed", score: float | None = None, max_score: float = 2.0,
           metrics: dict | None = None, figure: dict | None = None, visibility: str = "visible",
           output: str = "") -> dict:
-    """One test in the layout of grader.results (Gradescope keys + extra_data)."""
+    """One test in the layout of grader.reports.results (Gradescope keys + extra_data)."""
     score = (max_score if status == "passed" else 0.0) if score is None else score
     return {"name": f"Title of {name}", "score": score, "max_score": max_score,
             "status": "passed" if status == "passed" else "failed", "output": output or f"{status}: {name}",

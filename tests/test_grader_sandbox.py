@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from grader.sandbox import Limits, Sandbox, bwrap_available
+from grader.sandbox.process import Limits, Sandbox, bwrap_available
 
 REPO = Path(__file__).resolve().parent.parent
 needs_bwrap = pytest.mark.skipif(not bwrap_available(), reason="bubblewrap isolation needs bwrap and root")
@@ -211,7 +211,7 @@ def test_writable_folders_are_capped_and_the_package_is_read_only(package):
 
 @pytest.mark.skipif(os.geteuid() != 0, reason="a memory cgroup needs root")
 def test_the_total_memory_of_a_sandbox_is_capped(package):
-    from grader.memory_cage import MemoryCage
+    from grader.sandbox.memory_cage import MemoryCage
 
     probe = MemoryCage.create(64 * 1024**2, "grader-probe")
     if probe is None:
@@ -342,7 +342,7 @@ def test_the_original_submission_is_never_changed(package):
 def test_a_python_installed_under_tmp_stays_visible(package, monkeypatch, tmp_path):
     # The sandbox's empty /tmp must be mounted before the Python folders are bound, or a
     # checkout (and its .venv) under /tmp, as in CI, would be hidden from the worker.
-    import grader.sandbox as sandbox_module
+    import grader.sandbox.process as sandbox_module
 
     venv = tmp_path / ".venv"
     venv.mkdir()
@@ -361,9 +361,9 @@ def test_a_sandbox_that_cannot_start_is_the_graders_failure_not_a_crash(package,
     """A worker that dies before its hello line never ran student code (a folder out of
     its user's reach, a refused namespace): SandboxBroken, every later call too, and
     run_tests gives no result at all rather than a column of "crashed"."""
-    from grader.run import run_tests
-    from grader.sandbox import SandboxBroken
-    from grader.spec import load_spec
+    from grader.harness.run import run_tests
+    from grader.sandbox.process import SandboxBroken
+    from grader.harness.spec import load_spec
 
     broken = [sys.executable, "-c", "import sys; sys.stderr.write('cannot open worker.py'); sys.exit(2)"]
     monkeypatch.setattr(Sandbox, "_command", lambda self: broken)

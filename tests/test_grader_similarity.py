@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from grader import similarity as sim
+from grader.batch import similarity as sim
 from grader.samples.example_class import Replacement, replace_functions
 
 REPO = Path(__file__).resolve().parent.parent

@@ -1,6 +1,6 @@
 """``grader submit``: the hand-in zip and its manifest, and the grader's check of it.
 
-Most tests open the zip as the grader does (:func:`grader.submissions.opened`) without
+Most tests open the zip as the grader does (:func:`grader.batch.submissions.opened`) without
 running any graded test; one batch grades a submitted zip, a tampered one and the same
 two unpacked (as Gradescope unpacks an uploaded zip) on the momentum tests.
 """
@@ -22,15 +22,15 @@ import pytest
 
 import grader
 from grader.cli import main as cli_main
-from grader.grade import grade_submissions
-from grader.spec import load_spec
-from grader.submissions import (MANIFEST_NAME, Submission, SubmissionRefused, opened, safe_extract,
+from grader.batch.grade import grade_submissions
+from grader.harness.spec import load_spec
+from grader.batch.submissions import (MANIFEST_NAME, Submission, SubmissionRefused, opened, safe_extract,
                                 verify_manifest)
-from grader.submit import SubmitError, collect_files, submit, write_submission, zip_name
+from grader.student.submit import SubmitError, collect_files, submit, write_submission, zip_name
 
 # `grader.submit` and `grader.check` are the notebook functions; these are their modules.
-submit_module = importlib.import_module("grader.submit")
-check_module = importlib.import_module("grader.check")
+submit_module = importlib.import_module("grader.student.submit")
+check_module = importlib.import_module("grader.student.check")
 REPO = Path(__file__).resolve().parent.parent
 REFERENCE = REPO / "solutions"
 IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc")

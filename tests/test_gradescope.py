@@ -22,8 +22,8 @@ from pathlib import Path
 
 import pytest
 
-from grader.gradescope import build_autograder_zip, requirements
-from grader.spec import load_spec
+from grader.release.gradescope import build_autograder_zip, requirements
+from grader.harness.spec import load_spec
 
 REPO = Path(__file__).resolve().parent.parent
 IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc")
@@ -57,7 +57,7 @@ def test_archive_holds_what_gradescope_needs_at_its_top(archive):
     with zipfile.ZipFile(archive) as handle:
         infos = {info.filename: info for info in handle.infolist()}
     for name in ("setup.sh", "run_autograder", "requirements.txt", "pyproject.toml", "grader/__init__.py",
-                 "grader/grade.py", "grader/scheduler.py", "grader/gradebook.py", "grader/isolation.py", "grader/worker.py", "grader/plugin.py", "grader/tests/pytest.ini",
+                 "grader/batch/grade.py", "grader/batch/scheduler.py", "grader/batch/gradebook.py", "grader/sandbox/isolation.py", "grader/sandbox/worker.py", "grader/harness/plugin.py", "grader/tests/pytest.ini",
                  "grader/tests/conftest.py", "grader/tests/public/test_momentum.py", "grader/tests/hidden/test_grid.py",
                  "solutions/__init__.py"):
         assert name in infos, name
@@ -91,8 +91,8 @@ def test_requirements_are_pins_of_pyproject_for_what_the_archive_imports(archive
 def test_archive_holds_only_what_grading_reaches(archive):
     with zipfile.ZipFile(archive) as handle:
         names = set(handle.namelist())
-    for instructor_only in ("grader/release.py", "grader/release_book.py", "grader/similarity.py",
-                            "grader/samples/example_class.py", "grader/release_files/run.sh"):
+    for instructor_only in ("grader/release/edition.py", "grader/release/book.py", "grader/batch/similarity.py",
+                            "grader/samples/example_class.py", "grader/release/files/run.sh"):
         assert instructor_only not in names
 
 

@@ -23,11 +23,11 @@ from pathlib import Path
 
 import pytest
 
-from grader.gradescope import build_autograder_zip
-from grader.grade import grade_submissions
-from grader.isolation import resolve_isolation
-from grader.spec import load_spec
-from grader.submit import write_submission
+from grader.release.gradescope import build_autograder_zip
+from grader.batch.grade import grade_submissions
+from grader.sandbox.isolation import resolve_isolation
+from grader.harness.spec import load_spec
+from grader.student.submit import write_submission
 
 REPO = Path(__file__).resolve().parent.parent
 IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc")
@@ -123,7 +123,7 @@ def by_test(data: dict) -> dict[str, tuple[str, float]]:
 def test_setup_check_passes_in_the_fresh_venv(image):
     env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTHON", "VIRTUAL_ENV"))}
     env["PYTHONPATH"] = str(root_source := image / "source")
-    completed = subprocess.run([str(image / "venv" / "bin" / "python"), "-m", "grader.gradescope", "check-setup"],
+    completed = subprocess.run([str(image / "venv" / "bin" / "python"), "-m", "grader.release.gradescope", "check-setup"],
                                cwd=root_source, env=env, capture_output=True, text=True, timeout=300)
     assert completed.returncode == 0, completed.stdout + completed.stderr
     tests = load_spec()

@@ -48,7 +48,7 @@ from pathlib import Path
 
 import pytest
 
-from grader.release import MARKER, ReleaseError, build_release, check_replaceable, student_grader_files
+from grader.release.edition import MARKER, ReleaseError, build_release, check_replaceable, student_grader_files
 
 pytestmark = pytest.mark.xdist_group("release")
 
@@ -151,7 +151,7 @@ def test_the_student_edition_has_no_twins_and_steps_with_the_students_code(relea
 def test_student_folder_layout(release):
     student = release.student
     for name in ("README.md", "run.sh", "pyproject.toml", ".gitignore", MARKER, "exercises/__init__.py",
-                 "grader/__init__.py", "grader/cli.py", "grader/check.py", "grader/notebook.py",
+                 "grader/__init__.py", "grader/cli.py", "grader/student/check.py", "grader/student/notebook.py",
                  "grader/tests/pytest.ini", "grader/tests/conftest.py", "book/intro.md", "book/conventions.md",
                  "book/glossary.md"):
         assert (student / name).is_file(), name
@@ -353,7 +353,7 @@ def test_the_student_edition_names_the_commands_its_readme_teaches(release):
     assert not [name for name, text in texts.items() if "`grader check" in text or "`grader submit" in text]
     assert "then run `bash run.sh check momentum`" in texts["response/momentum_1d.py"]
     record = json.loads((exercises / ".generated.json").read_text(encoding="utf-8"))["sha256"]
-    from grader.release import _sha256
+    from grader.release.edition import _sha256
     assert {name: _sha256(exercises / name) for name in record} == record, "the generator's record went stale"
     for command in ("check", "submit"):
         result = subprocess.run([PYTHON, "-S", "-c", STUDENT_GRADER, command, "--help"], cwd=student,
@@ -416,7 +416,7 @@ def test_student_grader_loses_exactly_the_expected_tests_on_classic_bugs(release
     """Classic bugs of the example class, one or more per exercise: the student edition's
     check fails exactly the public tests each bug must fail, as the instructor's does."""
     from grader.samples.example_class import BUGGY_SAMPLES, build_buggy_sample
-    from grader.spec import load_spec
+    from grader.harness.spec import load_spec
 
     public = {t.name for t in load_spec() if t.public}
     samples = [s for s in BUGGY_SAMPLES if s.name in CLASSIC_BUGS]
@@ -580,7 +580,7 @@ def test_release_never_overwrites_what_is_not_an_earlier_release(release, tmp_pa
 
 def test_release_refuses_an_edition_that_would_reveal_a_solution(tmp_path):
     """The release's own guard (run before anything is moved into place) names each leak."""
-    from grader.release import solution_blocks, verify_student
+    from grader.release.edition import solution_blocks, verify_student
 
     folder = tmp_path / "student"
     (folder / "exercises/response").mkdir(parents=True)
@@ -622,7 +622,7 @@ def test_release_command_replaces_an_earlier_release(release, tmp_path):
 
 
 def test_changed_files_are_what_git_status_lists(tmp_path):
-    from grader.release import changed_files, repository_commit
+    from grader.release.edition import changed_files, repository_commit
 
     def git(*args):
         subprocess.run(["git", "-C", str(tmp_path), "-c", "user.name=t", "-c", "user.email=t@example.org", *args],
@@ -711,7 +711,7 @@ def test_the_student_edition_does_not_install_the_instructors_compiled_twins(rel
 
 
 def test_a_runtime_pin_is_kept_for_an_imported_module_and_for_what_it_needs():
-    from grader.release import used_requirements
+    from grader.release.edition import used_requirements
 
     pins = ["numpy==2.4.6", "numba==0.68.1", "llvmlite==0.50.0", "sympy==1.14.0"]
     assert used_requirements(pins, {"numpy", "os"}) == ["numpy==2.4.6"]

@@ -8,7 +8,7 @@ One release is built for the module (about 6 s).  Then:
 - each glued value a chapter's text quotes is there, as the chapter's executed run gave
   it and formatted as its role asks, in a paragraph that says it is the reference's;
 - no cell imports myst-nb, and the student's packages include neither myst-nb nor
-  Sphinx (``grader.notebook.glue`` stands in: it shows a value only when asked to);
+  Sphinx (``grader.student.notebook.glue`` stands in: it shows a value only when asked to);
 - the reference outputs are stored once, in the notebook: the fallback of a cell finds
   them in the notebook as saved after a run (marked ``book``: about 30 s), and says so
   when a run of the student's own code was saved over them;
@@ -30,7 +30,7 @@ from pathlib import Path
 
 import pytest
 
-from grader.release import build_release
+from grader.release.edition import build_release
 
 pytestmark = pytest.mark.xdist_group("release")
 
@@ -143,7 +143,7 @@ def test_student_notebooks_need_neither_myst_nb_nor_sphinx(release, monkeypatch)
     names = {re.split(r"[=<>!~ \[]", d, maxsplit=1)[0].lower().replace("_", "-") for d in dependencies}
     assert not names & {"myst-nb", "myst-parser", "sphinx", "jupyter-book"}, dependencies
     # The stand-in for myst-nb's glue: shows the value only when asked to.
-    from grader import notebook
+    from grader.student import notebook
 
     shown = []
     monkeypatch.setattr("IPython.display.display", lambda value: shown.append(value))
@@ -192,7 +192,7 @@ def test_the_fallback_finds_the_reference_in_the_notebook_as_saved(release, tmp_
     import nbformat
     from nbclient import NotebookClient
 
-    from grader.notebook import outputs_digest
+    from grader.student.notebook import outputs_digest
 
     student = tmp_path / "course"
     shutil.copytree(release.student, student)
@@ -285,23 +285,23 @@ def _kernel_stderr(spec_file: Path, tmp_path: Path) -> str:
 def test_the_students_kernel_starts_without_the_tcp_warning(release, tmp_path):
     run_sh = (release.student / "run.sh").read_text()
     assert re.search(r"ipykernel install [^\n]*--name \"\$KERNEL\"", run_sh)
-    assert '-m grader.notebook quiet-kernel "$VENV/share/jupyter/kernels/$KERNEL/kernel.json"' in run_sh
+    assert '-m grader.student.notebook quiet-kernel "$VENV/share/jupyter/kernels/$KERNEL/kernel.json"' in run_sh
     prefix = tmp_path / "venv"
     subprocess.run([sys.executable, "-m", "ipykernel", "install", "--prefix", str(prefix), "--name", "course"],
                    check=True, capture_output=True)
     spec_file = prefix / "share/jupyter/kernels/course/kernel.json"
     assert "without encryption" in _kernel_stderr(spec_file, tmp_path)   # ipykernel's own spec warns
-    result = subprocess.run([sys.executable, "-m", "grader.notebook", "quiet-kernel", str(spec_file)],
+    result = subprocess.run([sys.executable, "-m", "grader.student.notebook", "quiet-kernel", str(spec_file)],
                             cwd=release.student, env={**os.environ, "PYTHONPATH": str(release.student)},
                             capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
     assert _kernel_stderr(spec_file, tmp_path) == ""
     # A second run changes nothing; a missing file is an error that says which.
     before = spec_file.read_text()
-    subprocess.run([sys.executable, "-m", "grader.notebook", "quiet-kernel", str(spec_file)], check=True,
+    subprocess.run([sys.executable, "-m", "grader.student.notebook", "quiet-kernel", str(spec_file)], check=True,
                    cwd=release.student, env={**os.environ, "PYTHONPATH": str(release.student)})
     assert spec_file.read_text() == before
-    result = subprocess.run([sys.executable, "-m", "grader.notebook", "quiet-kernel", str(tmp_path / "none.json")],
+    result = subprocess.run([sys.executable, "-m", "grader.student.notebook", "quiet-kernel", str(tmp_path / "none.json")],
                             cwd=release.student, env={**os.environ, "PYTHONPATH": str(release.student)},
                             capture_output=True, text=True)
     assert result.returncode == 1 and "none.json" in result.stderr

@@ -1,9 +1,9 @@
-"""The student edition's ``run.sh`` (``grader/release_files/run.sh``), run for real by bash.
+"""The student edition's ``run.sh`` (``grader/release/files/run.sh``), run for real by bash.
 
 Python, pip and Jupyter are stand-ins so that no package is downloaded: a fake
 ``python3`` makes a stub virtual environment whose ``bin/python`` runs this
 interpreter except for ``-m pip`` and ``-m ipykernel`` (which print what pip prints and
-exit with ``FAKE_PIP_STATUS``; ``-m grader.notebook`` does nothing), and whose
+exit with ``FAKE_PIP_STATUS``; ``-m grader.student.notebook`` does nothing), and whose
 ``bin/jupyter`` prints its arguments.  A fake
 ``id`` answers ``id -u`` with ``FAKE_UID``, so the root and non-root cases both run
 whoever runs the tests.
@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parent.parent
-TEMPLATE = REPO / "grader" / "release_files" / "run.sh"
+TEMPLATE = REPO / "grader" / "release" / "files" / "run.sh"
 #: What setuptools prints on an editable install (the box students saw on every set-up).
 PIP_CHATTER = "!!\n  ****  SetuptoolsDeprecationWarning: editable install  ****\n!!"
 
@@ -28,7 +28,7 @@ STUB_PYTHON = """#!/bin/sh
 echo "$*" >> "$(dirname "$0")/../calls.log"
 if [ "$1" = -m ] && [ "$2" = pip ]; then printf '%s\\n' "$PIP_CHATTER"; exit "${FAKE_PIP_STATUS:-0}"; fi
 if [ "$1" = -m ] && [ "$2" = ipykernel ]; then echo "Installed kernelspec"; exit 0; fi
-if [ "$1" = -m ] && [ "$2" = grader.notebook ]; then exit 0; fi
+if [ "$1" = -m ] && [ "$2" = grader.student.notebook ]; then exit 0; fi
 exec REAL "$@"
 """
 STUB_JUPYTER = """#!/bin/sh

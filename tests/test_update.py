@@ -4,7 +4,7 @@ One release (1.0.0) is built from the repository for the module (about 6 s); eac
 "corrected" release is derived from a copy of its student edition the way a second
 ``grader release`` would differ: files edited, added or removed, a new section on top
 of ``CHANGELOG.md``, the originals kept again and the marker written again with the new
-version and hashes (:func:`grader.update.write_originals`, the release's own ``_marker``).
+version and hashes (:func:`grader.student.update.write_originals`, the release's own ``_marker``).
 Each test works on a fresh copy of the student edition, edited as a student would.
 """
 from __future__ import annotations
@@ -21,8 +21,8 @@ from pathlib import Path
 
 import pytest
 
-from grader.release import MARKER, _marker, build_release
-from grader.update import (ATTENTION, BACKUPS, CHANGELOG, DONE, ORIGINALS, REFUSED, UpdateRefused, merge_text,
+from grader.release.edition import MARKER, _marker, build_release
+from grader.student.update import (ATTENTION, BACKUPS, CHANGELOG, DONE, ORIGINALS, REFUSED, UpdateRefused, merge_text,
                            notebook_sources, update, write_originals)
 
 pytestmark = pytest.mark.xdist_group("release")
@@ -295,8 +295,8 @@ def test_grading_uses_the_courses_library_files_and_says_which_differed(tmp_path
     """A submission whose library file is broken is graded with the course's (and told
     so); its exercise file and its own files are its own; without the course's library
     the same submission fails, so the course's files are what made it pass."""
-    from grader.grade import grade_submissions
-    from grader.spec import load_spec
+    from grader.batch.grade import grade_submissions
+    from grader.harness.spec import load_spec
 
     repo = Path(__file__).resolve().parent.parent
     tests = [t for t in load_spec() if t.exercise == "momentum"]
@@ -328,8 +328,8 @@ def test_grading_uses_the_courses_library_files_and_says_which_differed(tmp_path
 
 
 def test_the_graded_copy_holds_the_submissions_exercises_and_the_courses_library_only(tmp_path):
-    from grader.release import scan_for_solutions, solution_blocks
-    from grader.submissions import library_files, with_course_library
+    from grader.release.edition import scan_for_solutions, solution_blocks
+    from grader.batch.submissions import library_files, with_course_library
 
     repo = Path(__file__).resolve().parent.parent
     package = tmp_path / "exercises"
@@ -349,7 +349,7 @@ def test_the_graded_copy_holds_the_submissions_exercises_and_the_courses_library
 
 
 def test_the_autograder_bundles_the_courses_exercises_package(tmp_path):
-    from grader.gradescope import build_autograder_zip
+    from grader.release.gradescope import build_autograder_zip
 
     with zipfile.ZipFile(build_autograder_zip(out=tmp_path / "autograder.zip")) as archive:
         names = set(archive.namelist())
@@ -362,7 +362,7 @@ def test_the_autograder_bundles_the_courses_exercises_package(tmp_path):
 def test_the_student_editions_library_files_are_the_courses(release):
     """What students get is what grading compares with: no student is told that an
     untouched library file differs."""
-    from grader.submissions import library_files
+    from grader.batch.submissions import library_files
 
     repo = Path(__file__).resolve().parent.parent
     for relative, path in library_files(repo / "exercises").items():
@@ -397,7 +397,7 @@ def test_run_sh_update_takes_a_path_relative_to_where_it_was_called(release, tmp
 
 
 def test_the_grader_knows_a_library_file_by_the_header_the_generator_writes():
-    from grader.submissions import LIBRARY_HEADER as KNOWN
+    from grader.batch.submissions import LIBRARY_HEADER as KNOWN
     from tools.generate_exercises import EXERCISE_HEADER, LIBRARY_HEADER, header
 
     assert header("solutions/vector.py").startswith(KNOWN)

@@ -67,7 +67,7 @@ REFUSED = 3
 CACHE_PARTS = ("__pycache__",)
 CACHE_SUFFIXES = (".pyc", ".pyo")
 
-#: The exercise (the name ``grader check`` takes, see grader/spec.py) of every stubbed
+#: The exercise (the name ``grader check`` takes, see grader/harness/spec.py) of every stubbed
 #: function, by module under solutions/: one name for all the module's stubs, or
 #: {qualname: exercise} where the module serves two exercises.  A stub not listed
 #: (tests/test_generate_exercises.py fails for the repository's own) names plain

@@ -149,7 +149,7 @@ def _start_worker(slots) -> None:
 
 
 def _graded_tests():
-    from grader.spec import load_spec
+    from grader.harness.spec import load_spec
 
     return load_spec()
 
@@ -158,8 +158,8 @@ def grade_mutant(mutant: Mutant) -> Mutant:
     """Apply the mutant in this worker's copy, run the tests in order, restore the copy."""
     from cosmic_ray.mutating import mutate_code
     from cosmic_ray.plugins import get_operator
-    from grader.run import run_tests
-    from grader.sandbox import Limits
+    from grader.harness.run import run_tests
+    from grader.sandbox.process import Limits
 
     started = time.perf_counter()
     target = _WORKSPACE / "exercises" / mutant.module

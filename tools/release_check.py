@@ -129,15 +129,15 @@ def mounted(image: Path):
 
 
 def uid_locks() -> Path:
-    """This machine's registry of sandbox users (grader.sandbox), shared with the image:
+    """This machine's registry of sandbox users (grader.sandbox.process), shared with the image:
     its processes are this machine's, and a grader outside (a test run, a batch) that
     did not see the image's locks would take its sandboxes' users for strays and kill
     them."""
-    from grader.sandbox import uid_lock_folder
+    from grader.sandbox.process import uid_lock_folder
 
     folder = uid_lock_folder()
     if folder is None:
-        raise CheckError("no safe folder for the sandbox users' locks here (see grader.sandbox.uid_lock_folder)")
+        raise CheckError("no safe folder for the sandbox users' locks here (see grader.sandbox.process.uid_lock_folder)")
     return folder
 
 
@@ -160,7 +160,7 @@ def inside(image: Path, way: str, script: str, env: dict[str, str] | None = None
 
 def submissions(folder: Path) -> dict[str, Path]:
     """The reference and the stubs (folders) and a student's zip written by `grader submit`."""
-    from grader.submit import write_submission
+    from grader.student.submit import write_submission
 
     shutil.copytree(REPO / "solutions", folder / "reference" / "exercises", ignore=IGNORE)
     shutil.copytree(REPO / "exercises", folder / "stubs" / "exercises", ignore=IGNORE)
@@ -187,8 +187,8 @@ def by_test(data: dict) -> dict[str, tuple[str, float]]:
 
 
 def check(out: Path, fresh: bool, ways: tuple[str, ...]) -> int:
-    from grader.grade import grade_submissions
-    from grader.gradescope import build_autograder_zip
+    from grader.batch.grade import grade_submissions
+    from grader.release.gradescope import build_autograder_zip
 
     if os.geteuid() != 0:
         raise CheckError("release-check needs root (debootstrap, chroot and setup.sh as Gradescope runs it)")

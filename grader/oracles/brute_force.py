@@ -9,7 +9,7 @@ Written here from that definition alone (numpy, no import of the reference engin
 the public graded tests ship to students.  Rows are compared with every later row in
 blocks, so memory stays O(N * block) and 3000 boxes take a few tens of milliseconds.
 
-Also here: :func:`pairs_figure` (the ``"pairs"`` picture of :mod:`grader.figures`)
+Also here: :func:`pairs_figure` (the ``"pairs"`` picture of :mod:`grader.harness.figures`)
 and :func:`smallest_wrong_scene`, which cuts a failing scene down to a few boxes that
 still fail, so that a student reads a small case rather than a random one.
 """
@@ -73,7 +73,7 @@ def overlapping_pairs(aabbs) -> set[tuple[int, int]]:
 
 
 def pairs_figure(aabbs, missed, extra, title: str, cell_size: float = 0.0, bounds=None) -> dict:
-    """The ``"pairs"`` picture of :mod:`grader.figures` for a failing scene.
+    """The ``"pairs"`` picture of :mod:`grader.harness.figures` for a failing scene.
 
     ``missed``: overlapping pairs the student's function did not return; ``extra``:
     pairs it returned whose boxes are apart.  ``cell_size > 0`` draws the grid,

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import plain
-from ..codec import SHAPE_TAG
+from ..sandbox.codec import SHAPE_TAG
 
 
 def interval(shape: dict, axis) -> tuple[float, float]:

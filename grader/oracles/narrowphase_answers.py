@@ -17,8 +17,8 @@ import math
 
 import numpy as np
 
-from ..codec import CONTACT_TAG, SHAPE_TAG, NotPlainData, check_feature_ids, decode_feature_ids
-from ..compare import as_number, as_vector, boolean, show
+from ..sandbox.codec import CONTACT_TAG, SHAPE_TAG, NotPlainData, check_feature_ids, decode_feature_ids
+from ..harness.compare import as_number, as_vector, boolean, show
 
 #: Contacts match within this (m): the oracle and a right answer compute the same
 #: closed forms in doubles (they agree to about 1e-15 m on shapes of about 1 m), while a
@@ -205,7 +205,7 @@ def _feature_ids_problem(got: dict, want: dict, points: list, matched: list) -> 
 
 def pair_figure(a: dict, b: dict, title: str, want: dict | None = None, got=None) -> dict:
     """Plain data for a picture of two shapes and the expected and returned contacts
-    (see :mod:`grader.figures`, kind "shapes")."""
+    (see :mod:`grader.harness.figures`, kind "shapes")."""
     figure = {"kind": "shapes", "title": title, "shapes": [a, b]}
     if want is not None:
         figure["expected"] = {k: want[k] for k in (CONTACT_TAG, "normal", "depth", "points")}

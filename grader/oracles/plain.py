@@ -1,4 +1,4 @@
-"""Shapes, bodies and contacts as the plain tagged dicts of :mod:`grader.codec`.
+"""Shapes, bodies and contacts as the plain tagged dicts of :mod:`grader.sandbox.codec`.
 
 The public graded tests build their inputs with these (never with the reference
 engine's classes); the worker rebuilds them with the student's own classes.  Units:
@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from ..codec import BODY_TAG, CONTACT_TAG, SHAPE_TAG
+from ..sandbox.codec import BODY_TAG, CONTACT_TAG, SHAPE_TAG
 
 
 def _xy(value) -> list[float]:

@@ -27,7 +27,7 @@ import numpy as np
 import pymunk
 
 from . import plain
-from ..codec import SHAPE_TAG
+from ..sandbox.codec import SHAPE_TAG
 
 #: Shapes closer than this (m) to touching get no yes/no answer here: the answer there
 #: depends on rounding, not on the method (see :func:`definite_overlap`).

@@ -18,7 +18,7 @@ must fail (``expected_failures``, found by grading the sample and each justified
 comment); the test suite grades every sample and checks that it loses the points of
 those tests and of no others, and that each of those tests loses at least half its
 points, as a test must when its failures come from one systematic bug
-(:mod:`grader.credit`).  Tests known to lose less are named (``weak_tests``): they are
+(:mod:`grader.harness.credit`).  Tests known to lose less are named (``weak_tests``): they are
 weak graded tests, reported, not hidden.
 
 Grading every sample with every graded test would take minutes, so a sample is graded
@@ -1755,14 +1755,14 @@ def grade_probe(tests, out_dir: Path, slot: int = 0,
     the TestResult list)``.
 
     Every call into the probe's worker, whatever path the test takes to it (a student
-    call, a batch, or a scene run by :mod:`grader.scene_driver`), brings back what the
+    call, a batch, or a scene run by :mod:`grader.sandbox.scene_driver`), brings back what the
     code printed: the codes of the exercise functions it reached.  A test that seems to
     reach none is not believed: it gets None (it may reach any).  Tests run one after
     the other, so what is printed between two tests' ends belongs to the later one.
     The results are the reference's own (the probe only prints): every test passes.
     """
-    from ..run import run_tests
-    from ..sandbox import Sandbox
+    from ..harness.run import run_tests
+    from ..sandbox.process import Sandbox
 
     folder, codes = build_probe(out_dir)
     printed: list[str] = []
@@ -1811,7 +1811,7 @@ def add_example_class_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main_example_class(args: argparse.Namespace) -> int:
-    from ..spec import load_spec
+    from ..harness.spec import load_spec
 
     tests = load_spec()
     total = sum(t.points for t in tests)
@@ -1840,7 +1840,7 @@ def grade_table(tests, folders: dict[str, Path], all_tests: bool = False, slot: 
     import tempfile
     import time
 
-    from ..run import run_tests
+    from ..harness.run import run_tests
 
     total = sum(t.points for t in tests)
     reached = None

@@ -90,7 +90,7 @@ COLLIDE_CIRCLES = frozenset({"contacts.circle_circle", "contacts.degenerate_shap
 #: Tests whose functions live in narrowphase.circle_circle (circles_overlap, collide_circle_circle).
 CIRCLE_CIRCLE = frozenset({"sat.circles_overlap", "sat.degenerate_shapes", "sat.random_against_reference"}) \
     | COLLIDE_CIRCLES
-#: The test that steps a scene with the student's resolver (grader/scene_driver.py).
+#: The test that steps a scene with the student's resolver (grader/sandbox/scene_driver.py).
 SCENE = frozenset({"impulse.scene"})
 
 FAILED_ANSWER = ("failed",)
@@ -375,7 +375,7 @@ try:
 except Exception:
     pass
 _json.dumps = lambda *args, **kwargs: '{"id": 1, "status": "ok", "value": true}'
-for _name in ("grader", "grader.sandbox", "grader.compare", "grader.plugin"):
+for _name in ("grader", "grader.sandbox.process", "grader.harness.compare", "grader.harness.plugin"):
     try:
         __import__(_name)
     except Exception:
@@ -638,7 +638,7 @@ _shapes.Circle = _MovedCircle
                    ERROR, ("cannot encode a _MovedCircle",)))),
     # The kernel keyring outlives a sandbox: a key readable by others, stored by one
     # submission, could be read by a later one under another uid.  The seccomp filter
-    # refuses add_key, keyctl and request_key (grader/seccomp.py).
+    # refuses add_key, keyctl and request_key (grader/sandbox/seccomp.py).
     HostileCase(
         "hostile-keyring-store", "hostile",
         "perfectly_inelastic_1d stores its module's source in the kernel keyring (a user key anyone may read, "
@@ -876,7 +876,7 @@ CASES: tuple[HostileCase, ...] = BROKEN + HOSTILE + SIZES + ARCHIVES + LAYOUTS +
 ESCAPED_FILE = "/tmp/grader-hostile-escaped.py"
 #: Size of the sparse file of the ``sparse-file`` layout (bytes; nothing is allocated).
 SPARSE_BYTES = 2 * 1024**3
-#: Files added by the ``many-files`` layout (more than grader.submissions.MAX_FILES).
+#: Files added by the ``many-files`` layout (more than grader.batch.submissions.MAX_FILES).
 MANY_FILES = 2_100
 #: Where the link layouts point, inside the folder the cases are written to.
 FRIEND_FOLDER = "copy-of-reference"
@@ -1168,7 +1168,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sentinel", default="/nonexistent-sentinel", help="folder the hostile writes aim at")
     args = parser.parse_args(argv)
     paths = build_cases(args.out, {"OUT": args.grading_out, "SENTINEL": args.sentinel})
-    from ..spec import load_spec
+    from ..harness.spec import load_spec
 
     print(table(tests=load_spec()))
     print(f"\nwrote {len(paths)} cases to {args.out}")

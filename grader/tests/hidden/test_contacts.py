@@ -20,8 +20,8 @@ import solutions.shapes
 from solutions.narrowphase.aabb_aabb import collide_aabb_aabb
 from solutions.narrowphase.dispatch import collide
 
-from grader import codec
-from grader.credit import check_cases
+from grader.sandbox import codec
+from grader.harness.credit import check_cases
 from grader.oracles import narrowphase_cases as cases
 from grader.oracles import plain
 from grader.oracles import random_cases as rc

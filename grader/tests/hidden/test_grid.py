@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from grader.compare import pairs as compare_pairs
-from grader.credit import fail
+from grader.harness.compare import pairs as compare_pairs
+from grader.harness.credit import fail
 from grader.oracles.brute_force import describe_boxes, overlapping_pairs
 from grader.oracles.random_cases import clustered_aabbs, random_aabbs
 from grader.tests.public.test_grid import CENTER_CELL, EVERY_CELL, MODULE, check_scenes

@@ -5,7 +5,7 @@ Instructor's side only: these may use the reference engine (``solutions``) and t
 impulse, +P to B and -P to A, conserves linear momentum and angular momentum about any
 point whatever P is, a single contact with e <= 1 and Coulomb friction gains no
 kinetic energy, and the velocity changes must be the impulses the function returned.
-The scene test runs :mod:`grader.scene_driver` (balls dropped in a box) in the
+The scene test runs :mod:`grader.sandbox.scene_driver` (balls dropped in a box) in the
 student's sandbox and in the reference's, side by side; when the trajectories part, it
 replays the scene here with the reference engine up to the first step that differs
 and calls the student's ``resolve_collision`` and ``correct_positions`` on that step's
@@ -19,10 +19,10 @@ import math
 import numpy as np
 import pytest
 
-from grader import scene_driver
-from grader.codec import encode_body, encode_contact
-from grader.compare import as_vector, number, show, vector
-from grader.credit import check_cases, fail
+from grader.sandbox import scene_driver
+from grader.sandbox.codec import encode_body, encode_contact
+from grader.harness.compare import as_vector, number, show, vector
+from grader.harness.credit import check_cases, fail
 from grader.oracles.impulse_sympy import show_body, show_contact
 from solutions.body import Body
 from solutions.contact import Contact
@@ -293,7 +293,7 @@ def run_driver(code, who: str) -> tuple[np.ndarray, float, float]:
 
 
 def scene_contacts(balls: list[Body], ground: Body, radius: float) -> list[tuple[Body, Body, Contact]]:
-    """The contacts of one step, as :func:`grader.scene_driver.drop_balls` finds them."""
+    """The contacts of one step, as :func:`grader.sandbox.scene_driver.drop_balls` finds them."""
     contacts = []
     for i in range(len(balls)):
         xi, yi = balls[i].position

@@ -9,9 +9,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from grader.compare import pairs as compare_pairs
-from grader.compare import show
-from grader.credit import fail
+from grader.harness.compare import pairs as compare_pairs
+from grader.harness.compare import show
+from grader.harness.credit import fail
 from grader.oracles.brute_force import describe_boxes, overlapping_pairs, pairs_figure, smallest_wrong_scene
 from grader.oracles.random_cases import clustered_aabbs, random_aabbs
 from grader.tests.public.test_quadtree import (FUNCTION, MODULE, WHO, call_or_timeout, check_scenes, pairs_text,

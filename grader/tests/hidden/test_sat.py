@@ -1,7 +1,7 @@
 """SAT yes/no tests, hidden side: expected answers from the reference engine.
 
 Shapes are built as plain data (:mod:`grader.oracles.plain`) and rebuilt with the
-reference's classes (:func:`grader.codec.decode_shape`) for the expected answer, so
+reference's classes (:func:`grader.sandbox.codec.decode_shape`) for the expected answer, so
 the student's code and the reference see the very same numbers.  Pairs that pymunk
 finds within 1e-7 m of touching are left out of random batches (rounding decides them).
 """
@@ -15,8 +15,8 @@ import pytest
 import solutions.shapes
 from solutions.narrowphase.dispatch import shapes_overlap
 
-from grader import codec
-from grader.credit import check_cases
+from grader.sandbox import codec
+from grader.harness.credit import check_cases
 from grader.oracles import narrowphase_cases as cases
 from grader.oracles import plain
 from grader.oracles import random_cases as rc

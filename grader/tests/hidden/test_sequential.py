@@ -2,7 +2,7 @@
 ten boxes stepped with the student's sweeps against the complementarity answer.
 
 Instructor's side only (it imports ``solutions``).  The stack runs
-:func:`grader.scene_driver.stack_of_boxes` in the student's sandbox: a resting stack's
+:func:`grader.sandbox.scene_driver.stack_of_boxes` in the student's sandbox: a resting stack's
 contact k, counted from the bottom, carries the weight of the ``count - k`` boxes
 above it, ``(count - k) m g dt`` per step (the solution of the LCP of the book's first
 chapter); the student's impulses must reach it and the boxes stay at rest.
@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from grader.credit import check_cases, fail
+from grader.harness.credit import check_cases, fail
 from grader.tests.public.test_sequential import answer_problem, describe, random_cases
 from solutions.solver.contact_point import apply_friction_impulse, apply_normal_impulse
 

@@ -28,9 +28,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from grader.compare import as_number, as_vector, show
-from grader.credit import check_cases, fail
-from grader.shrink import smallest_failure
+from grader.harness.compare import as_number, as_vector, show
+from grader.harness.credit import check_cases, fail
+from grader.harness.shrink import smallest_failure
 from grader.oracles import narrowphase_cases as cases
 from grader.oracles import plain
 from grader.oracles import random_cases as rc

@@ -12,12 +12,12 @@ import pytest
 from hypothesis import example, given
 from hypothesis import strategies as st
 
-from grader.compare import pairs as compare_pairs
-from grader.compare import show
-from grader.credit import fail
+from grader.harness.compare import pairs as compare_pairs
+from grader.harness.compare import show
+from grader.harness.credit import fail
 from grader.oracles.brute_force import describe_boxes, overlapping_pairs, pairs_figure, smallest_wrong_scene
 from grader.oracles.random_cases import clustered_aabbs, random_aabbs
-from grader.outcome import StudentCallFailed, StudentCallStopped
+from grader.harness.outcome import StudentCallFailed, StudentCallStopped
 
 MODULE = "broadphase.uniform_grid"
 EVERY_CELL = "pairs_grid_every_cell"

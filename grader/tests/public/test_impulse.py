@@ -26,8 +26,8 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from grader.compare import number, show, vector
-from grader.credit import check_cases, fail
+from grader.harness.compare import number, show, vector
+from grader.harness.credit import check_cases, fail
 from grader.oracles import impulse_sympy as oracle
 from grader.oracles import plain
 from grader.oracles.random_cases import unit_vector

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from grader.compare import number, show
-from grader.credit import check_cases
+from grader.harness.compare import number, show
+from grader.harness.credit import check_cases
 
 MODULE = "response.momentum_1d"
 KMH = 1000 / 3600

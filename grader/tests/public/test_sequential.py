@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from grader.compare import number, show
-from grader.credit import check_cases
+from grader.harness.compare import number, show
+from grader.harness.credit import check_cases
 
 MODULE = "solver.contact_point"
 FIELDS = ("nx", "ny", "rn_a", "rn_b", "rt_a", "rt_b", "ima", "imb", "iia", "iib", "mass_normal", "mass_tangent",

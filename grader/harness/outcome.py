@@ -1,0 +1,139 @@
+"""The result of one graded test, in words a student understands, and the one table of
+test statuses every part of the grader uses (``grader check``, the reports, the
+gradebook and Gradescope's results.json)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+#: Every status a graded test can end with, and what it means.  One table: the check
+#: table, the reports, the gradebook and results.json all read their words from here.
+STATUS_MEANINGS = {
+    "passed": "passed",
+    "failed": "failed: a wrong answer",
+    "not_implemented": "not implemented yet: a stub still raises NotImplementedError",
+    "error": "raised an error: an exception in the student's code",
+    "timeout": "timed out",
+    "crashed": "crashed: the worker process died",
+    "forbidden": "forbidden: the code did something it may not do",
+    "not_run": "not run: the submission used up its time",
+}
+STATUSES = tuple(STATUS_MEANINGS)
+#: Characters of a message kept; longer ones are cut (the parent never stores more).
+MESSAGE_LIMIT = 20_000
+#: What the student's code printed kept per test: at most this many characters ...
+OUTPUT_LIMIT = 2_000
+#: ... and lines (a debug print in a loop must not bury the table), then a marker
+#: "[... N more characters not shown]".
+OUTPUT_LINES = 30
+#: Room for that marker: printed output read back from a results file is at most
+#: OUTPUT_LIMIT + OUTPUT_MARKER_ROOM characters.
+OUTPUT_MARKER_ROOM = 64
+
+
+def capped(text: str, limit: int) -> str:
+    """``text`` cut to ``limit`` characters, saying how much was left out."""
+    text = str(text)
+    if len(text) <= limit:
+        return text
+    return text[:limit] + not_shown(len(text) - limit)
+
+
+def not_shown(count: int) -> str:
+    """The marker put where ``count`` characters were cut."""
+    return f"\n[... {count} more characters not shown]"
+
+
+def capped_output(text: str, dropped: int = 0) -> str:
+    """What a test's code printed, cut to OUTPUT_LINES lines and OUTPUT_LIMIT characters;
+    the marker counts the characters left out, ``dropped`` (cut earlier) included."""
+    lines = text.splitlines(keepends=True)
+    if len(lines) > OUTPUT_LINES:
+        kept = "".join(lines[:OUTPUT_LINES])
+        dropped += len(text) - len(kept)
+        text = kept
+    if len(text) > OUTPUT_LIMIT:
+        dropped += len(text) - OUTPUT_LIMIT
+        text = text[:OUTPUT_LIMIT]
+    return text.rstrip("\n") + not_shown(dropped) if dropped else text
+
+
+@dataclass
+class Outcome:
+    """What a graded test found.
+
+    Attributes
+    ----------
+    status : str
+        One of ``STATUSES``.
+    fraction : float
+        Share of the right cases, in [0, 1]; it earns points only for a test marked
+        ``partial_credit`` (see :mod:`grader.harness.credit`).
+    message : str
+        What was expected against what came back.
+    figure : dict or None
+        Plain data for a picture of the failing case (see :mod:`grader.harness.figures`).
+    metrics : dict
+        Figures such as speed (``seconds``, ``reference_seconds``) and error.
+    output : str
+        What the student's code printed during the test (capped).
+    """
+
+    status: str
+    fraction: float = 0.0
+    message: str = ""
+    figure: dict | None = None
+    metrics: dict = field(default_factory=dict)
+    output: str = ""
+
+    @classmethod
+    def passed(cls, message: str = "", **metrics) -> "Outcome":
+        return cls("passed", 1.0, message, metrics=metrics)
+
+    @classmethod
+    def failed(cls, message: str, figure: dict | None = None, fraction: float = 0.0, **metrics) -> "Outcome":
+        return cls("failed", fraction, message, figure, metrics)
+
+    def to_dict(self) -> dict:
+        """Plain data (JSON) for the grading protocol and the results files."""
+        return {"status": self.status, "fraction": float(self.fraction), "message": self.message,
+                "figure": self.figure, "metrics": dict(self.metrics), "output": self.output}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "Outcome":
+        """The outcome ``to_dict`` wrote; unknown statuses read as errors, sizes capped."""
+        status = str(data.get("status", "error"))
+        if status not in STATUSES:
+            status = "error"
+        try:
+            fraction = min(1.0, max(0.0, float(data.get("fraction", 0.0))))
+        except (TypeError, ValueError):
+            fraction = 0.0
+        if fraction != fraction:  # NaN
+            fraction = 0.0
+        figure = data.get("figure")
+        metrics = data.get("metrics")
+        return cls(status, fraction, capped(data.get("message", "") or "", MESSAGE_LIMIT),
+                   figure if isinstance(figure, dict) else None, metrics if isinstance(metrics, dict) else {},
+                   capped(data.get("output", "") or "", OUTPUT_LIMIT + OUTPUT_MARKER_ROOM))
+
+
+class StudentCallFailed(Exception):
+    """A call into the student's code did not return a value (it raised, or returned
+    something unreadable); carries the Outcome.  An ordinary exception, so Hypothesis
+    shrinks the input that made the student's code raise."""
+
+    def __init__(self, outcome: Outcome):
+        super().__init__(outcome.message)
+        self.outcome = outcome
+
+
+class StudentCallStopped(BaseException):
+    """A call that cannot be retried usefully: not implemented, timed out, crashed.
+
+    A ``BaseException``, so that Hypothesis stops at once instead of shrinking a case
+    against a stub or a hung worker; the graded-test plugin turns it into the outcome.
+    """
+
+    def __init__(self, outcome: Outcome):
+        super().__init__(outcome.message)
+        self.outcome = outcome

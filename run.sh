@@ -15,7 +15,7 @@ VENV=.venv
 PY="$VENV/bin/python"
 
 system_packages() {
-    # bubblewrap isolates student code in the grader (see grader/sandbox.py).
+    # bubblewrap isolates student code in the grader (see grader/sandbox/process.py).
     if ! command -v bwrap >/dev/null 2>&1; then
         if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
             (apt-get install -y -qq bubblewrap >/dev/null 2>&1 ||

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from .student.check import in_student_edition
 
 #: subcommand -> (module, add-arguments function, main function, help)
 SUBCOMMANDS = {
@@ -32,7 +33,7 @@ SUBCOMMANDS = {
 
 
 def list_tests(args) -> int:
-    from .harness.spec import load_spec
+    from .harness.run import load_spec  # deferred: pytest, heavy to import
 
     tests = load_spec()
     width = max(len(t.name) for t in tests)
@@ -43,7 +44,6 @@ def list_tests(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .student.check import in_student_edition
 
     # The student edition's README teaches `bash run.sh check`: usage lines say so.
     parser = argparse.ArgumentParser(prog="bash run.sh" if in_student_edition() else "grader",

@@ -31,7 +31,8 @@ from grader.samples.example_class import (ABOUT_FILE, BUGGY_SAMPLES, ERRATA, EXE
 from grader.harness.outcome import STATUSES, Outcome
 from grader.harness import plugin, spec
 from grader.harness.run import run_tests
-from grader.harness.spec import EXERCISES, load_spec
+from grader.harness.spec import EXERCISES
+from grader.harness.run import load_spec
 
 #: At least this many buggy samples, covering every exercise.
 MIN_SAMPLES = 25

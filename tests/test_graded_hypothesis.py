@@ -17,7 +17,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.internal.conjecture import engine, providers
 
-from grader.harness.plugin import HYPOTHESIS_PROFILE, PUBLIC_TESTS, register_hypothesis_profile, restore_hypothesis
+from grader.harness.plugin import HYPOTHESIS_PROFILE, register_hypothesis_profile, restore_hypothesis
+from grader.harness.spec import PUBLIC_TESTS
 from grader.harness.replay import replaying
 from grader.harness.run import collect
 

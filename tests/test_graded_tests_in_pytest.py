@@ -14,7 +14,8 @@ import pytest
 from grader.harness.credit import partial_points
 from grader.harness.plugin import spec_of  # noqa: F401  (the module imports without a session)
 from grader.harness.run import run_tests
-from grader.harness.spec import SpecError, load_spec
+from grader.harness.spec import SpecError
+from grader.harness.run import load_spec
 
 REPO = Path(__file__).resolve().parent.parent
 

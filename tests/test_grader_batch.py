@@ -32,7 +32,8 @@ from grader.reports import results as gs_results
 from grader.harness import run as grader_run
 from grader.reports.results import build_results, check_results, leaderboard, plain
 from grader.sandbox.process import Limits
-from grader.harness.spec import VISIBILITIES, load_spec
+from grader.harness.spec import VISIBILITIES
+from grader.harness.run import load_spec
 from grader.batch.submissions import (MAX_FILES, Submission, SubmissionPathError, SubmissionRefused, discover,
                                 fingerprint, opened, safe_extract, submission_id)
 

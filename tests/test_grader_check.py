@@ -28,7 +28,7 @@ from grader.harness.package import PackageNotFound, find_package
 from grader.student.check import CheckError, check, main, select_tests
 from grader.harness.figures import EXPECTED_COLOR, EXTRA_COLOR, GOT_COLOR, MISSED_COLOR, draw_figure, figure_png_base64, save_figure
 from matplotlib.patches import Rectangle
-from grader.harness.spec import load_spec
+from grader.harness.run import load_spec
 
 check_module = importlib.import_module("grader.student.check")  # `grader.check` names the function
 REPO = Path(__file__).resolve().parents[1]

@@ -18,10 +18,10 @@ from pathlib import Path
 
 from grader.reports import results as gs_results
 from grader.cli import main as cli_main
-from grader.harness.spec import load_spec
+from grader.harness.run import load_spec
 from grader.reports.feedback import FEEDBACK_NAME, feedback_html, is_shown, page_level, write_feedback_report
 from grader.harness.outcome import Outcome
-from grader.harness.plugin import TestResult as Result
+from grader.harness.outcome import TestResult as Result
 from grader.reports.instructor import write_student_report
 from grader.reports.results import build_results, check_results, results_entry, write_results
 from grader.harness.spec import TestSpec as Spec

@@ -48,7 +48,7 @@ from grader.batch.gradebook import LOG_NAME, read_grading_log
 from grader.reports.results import check_results, write_results
 from grader.sandbox.process import (RESPONSE_LIMIT, SANDBOX_UID_BASE, Limits, Sandbox, bwrap_available, processes_of,
                             stray_processes, uid_in_use)
-from grader.harness.spec import load_spec
+from grader.harness.run import load_spec
 from grader.batch.submissions import (MAX_FILES, Submission, SubmissionRefused, checked_path, discover, fingerprint,
                                 opened, scan_folder)
 

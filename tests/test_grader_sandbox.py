@@ -363,7 +363,7 @@ def test_a_sandbox_that_cannot_start_is_the_graders_failure_not_a_crash(package,
     run_tests gives no result at all rather than a column of "crashed"."""
     from grader.harness.run import run_tests
     from grader.sandbox.process import SandboxBroken
-    from grader.harness.spec import load_spec
+    from grader.harness.run import load_spec
 
     broken = [sys.executable, "-c", "import sys; sys.stderr.write('cannot open worker.py'); sys.exit(2)"]
     monkeypatch.setattr(Sandbox, "_command", lambda self: broken)

@@ -23,7 +23,7 @@ import pytest
 import grader
 from grader.cli import main as cli_main
 from grader.batch.grade import grade_submissions
-from grader.harness.spec import load_spec
+from grader.harness.run import load_spec
 from grader.batch.submissions import (MANIFEST_NAME, Submission, SubmissionRefused, opened, safe_extract,
                                 verify_manifest)
 from grader.student.submit import SubmitError, collect_files, submit, write_submission, zip_name
@@ -186,7 +186,7 @@ def test_submit_is_exported_for_notebooks_and_runs_the_checks_when_asked(tmp_pat
         calls.append((exercise, Path(package)))
         return Report()
 
-    monkeypatch.setattr(check_module, "run_check", fake_run_check)
+    monkeypatch.setattr(submit_module, "run_check", fake_run_check)
     package = course(tmp_path) / "exercises"
     out = io.StringIO()
     with redirect_stdout(out):

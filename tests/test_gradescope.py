@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 
 from grader.release.gradescope import build_autograder_zip, requirements
-from grader.harness.spec import load_spec
+from grader.harness.run import load_spec
 
 REPO = Path(__file__).resolve().parent.parent
 IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc")

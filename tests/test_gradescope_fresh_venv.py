@@ -26,7 +26,7 @@ import pytest
 from grader.release.gradescope import build_autograder_zip
 from grader.batch.grade import grade_submissions
 from grader.sandbox.isolation import resolve_isolation
-from grader.harness.spec import load_spec
+from grader.harness.run import load_spec
 from grader.student.submit import write_submission
 
 REPO = Path(__file__).resolve().parent.parent

@@ -56,8 +56,12 @@ REPO = Path(__file__).resolve().parent.parent
 PYTHON = sys.executable
 SITE_PACKAGES = sysconfig.get_path("purelib")
 MIN_TOKENS = 8
-NEVER = ("grade.py", "gradebook.py", "scheduler.py", "isolation.py", "gradescope.py", "samples/", "similarity.py", "report.py",
-         "release.py")
+#: The instructor's folders of grader/: never in the student edition.
+NEVER = ("batch", "reports", "release", "samples", "tests/hidden")
+#: What of grader/ a student holds: these folders whole, and the package face.
+SHIPPED_FOLDERS = ("sandbox", "harness", "student", "oracles", "tests/public")
+SHIPPED_FILES = ("__init__.py", "__main__.py", "cli.py", "errors.py", "tests/__init__.py", "tests/conftest.py",
+                 "tests/pytest.ini")
 #: Python of this .venv without the repository's editable install (see the docstring).
 STUDENT_PRELUDE = (f"import sys; sys.prefix = sys.exec_prefix = {sys.prefix!r}; "
                    f"sys.path.append({SITE_PACKAGES!r}); ")
@@ -165,10 +169,14 @@ def test_student_folder_layout(release):
         if "__pycache__" not in path.parts:
             copy = student / "exercises" / path.relative_to(REPO / "exercises")
             assert copy.read_text().replace("`bash run.sh ", "`grader ") == path.read_text(), copy
-    # The grader: exactly the computed whitelist, public tests in, instructor parts out.
+    # The grader: the student's role folders whole and the package face, nothing else.
     shipped = sorted(p.relative_to(student / "grader").as_posix() for p in (student / "grader").rglob("*")
                      if p.is_file())
-    assert shipped == sorted(student_grader_files(REPO / "grader"))
+    source = REPO / "grader"
+    expected = sorted([*SHIPPED_FILES, *(p.relative_to(source).as_posix() for folder in SHIPPED_FOLDERS
+                                         for p in (source / folder).rglob("*")
+                                         if p.is_file() and "__pycache__" not in p.parts)])
+    assert shipped == expected == sorted(student_grader_files(REPO / "grader"))
     assert sorted(p.name for p in (student / "grader/tests/public").glob("test_*.py")) == sorted(
         p.name for p in (REPO / "grader/tests/public").glob("test_*.py"))
     for name in NEVER:
@@ -416,7 +424,7 @@ def test_student_grader_loses_exactly_the_expected_tests_on_classic_bugs(release
     """Classic bugs of the example class, one or more per exercise: the student edition's
     check fails exactly the public tests each bug must fail, as the instructor's does."""
     from grader.samples.example_class import BUGGY_SAMPLES, build_buggy_sample
-    from grader.harness.spec import load_spec
+    from grader.harness.run import load_spec
 
     public = {t.name for t in load_spec() if t.public}
     samples = [s for s in BUGGY_SAMPLES if s.name in CLASSIC_BUGS]

@@ -296,7 +296,7 @@ def test_grading_uses_the_courses_library_files_and_says_which_differed(tmp_path
     so); its exercise file and its own files are its own; without the course's library
     the same submission fails, so the course's files are what made it pass."""
     from grader.batch.grade import grade_submissions
-    from grader.harness.spec import load_spec
+    from grader.harness.run import load_spec
 
     repo = Path(__file__).resolve().parent.parent
     tests = [t for t in load_spec() if t.exercise == "momentum"]

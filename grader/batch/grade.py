@@ -43,8 +43,10 @@ from ..sandbox.isolation import resolve_isolation
 from ..reports.results import RESULTS_NAME, read_results, refused_results, write_results
 from ..sandbox.process import Limits
 from .scheduler import Job, Worker, dismiss, run_jobs, run_order
-from ..harness.spec import TestSpec, load_spec
+from ..harness.spec import TestSpec
+from ..harness.run import load_spec
 from .submissions import SubmissionPathError, SubmissionRefused, discover, fingerprint, library_hash
+from ..harness.spec import SpecError
 
 WORK_NAME = ".work"  # scratch folder of a run inside the output folder, removed after
 LOCK_NAME = ".grader.lock"
@@ -345,7 +347,6 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> None:
 def main_grade(args: argparse.Namespace) -> int:
     """Run ``grader grade``; 0 when every submission has results, 1 if the grader failed on
     some (rerun to retry them), 2 for bad arguments."""
-    from ..harness.spec import SpecError
 
     if args.jobs < 1:
         print("grader grade: error: --jobs must be at least 1", file=sys.stderr)

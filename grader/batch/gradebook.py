@@ -33,12 +33,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
-from ..harness.outcome import Outcome
+from ..harness.outcome import Outcome, TestResult
 from ..reports.results import (RESULTS_NAME, build_results, read_results, refused_results, write_results,
                       write_text_atomic)
 from .scheduler import Job
-from ..harness.spec import TestSpec, load_spec
+from ..harness.spec import TestSpec
+from ..harness.run import load_spec
 from .submissions import Submission, library_note
+from ..reports.feedback import page_level, write_feedback_report
 
 GRADEBOOK_NAME = "gradebook.csv"
 LOG_NAME = "grading_log.jsonl"
@@ -101,7 +103,6 @@ def write_feedback(results_path: Path, submission_id: str, options: FeedbackOpti
     if not options.wanted:
         return
     try:
-        from ..reports.feedback import page_level, write_feedback_report
 
         targets = []
         if options.html:
@@ -129,8 +130,6 @@ def row_of(submission: Submission, state: str, data: dict | None, out_dir: Path,
 def finish_job(job: Job, elapsed: float, tests: list[TestSpec], digest: str, out_dir: Path, html: bool,
             warn: Callable[[str], None], feedback: FeedbackOptions | None = None) -> dict:
     """Write a finished job's results.json (and report); its summary row."""
-    from ..harness.plugin import TestResult
-
     submission = job.submission
     results_path = out_dir / submission.id / RESULTS_NAME
     if job.error is not None:

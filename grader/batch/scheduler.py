@@ -84,7 +84,7 @@ def worker_main() -> int:
         channel.write(json.dumps(event, allow_nan=True, default=str) + "\n")
         channel.flush()
 
-    from ..harness.run import run_tests  # the slow part (pytest): imported while the parent loads the spec
+    from ..harness.run import run_tests  # deferred: pytest, heavy to import
     line = sys.stdin.readline()
     if not line:
         os._exit(0)  # the parent found nothing to grade

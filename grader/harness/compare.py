@@ -169,3 +169,33 @@ def contact(got, want, atol: float = 1e-7) -> str | None:
             return f"contact points: expected {show(want.points.tolist())}, got {show(rows)}"
         remaining.pop(k)
     return None
+
+
+# Values as a student reads them in messages ----------------------------------------------------
+def number_text(value: float) -> str:
+    return f"{value:.10g}"
+
+
+def shape_text(shape: dict) -> str:
+    """A plain shape as the constructor call that rebuilds it (m, rad)."""
+    kind = shape.get(codec.SHAPE_TAG)
+
+    def xy(v):
+        return "(" + ", ".join(number_text(float(x)) for x in v) + ")"
+
+    if kind == "Circle":
+        return f"Circle(center={xy(shape['center'])}, radius={number_text(shape['radius'])})"
+    if kind == "AABB":
+        return f"AABB(min_corner={xy(shape['min_corner'])}, max_corner={xy(shape['max_corner'])})"
+    if kind == "OBB":
+        return (f"OBB(center={xy(shape['center'])}, half_extents={xy(shape['half_extents'])}, "
+                f"angle={number_text(shape['angle'])})")
+    if kind == "ConvexPolygon":
+        return "ConvexPolygon([" + ", ".join(xy(v) for v in shape["vertices"]) + "])"
+    return show(shape)
+
+
+def call_text(function: str, *args) -> str:
+    """``function(A, B)`` with the shapes written out, for failure messages."""
+    return f"{function}(" + ", ".join(shape_text(a) if isinstance(a, dict) and codec.SHAPE_TAG in a else show(a)
+                                      for a in args) + ")"

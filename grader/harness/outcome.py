@@ -5,6 +5,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from .credit import partial_points
+from .spec import TestSpec
+
 #: Every status a graded test can end with, and what it means.  One table: the check
 #: table, the reports, the gradebook and results.json all read their words from here.
 STATUS_MEANINGS = {
@@ -137,3 +140,22 @@ class StudentCallStopped(BaseException):
     def __init__(self, outcome: Outcome):
         super().__init__(outcome.message)
         self.outcome = outcome
+
+
+@dataclass
+class TestResult:
+    """A test, what it found, and how long it took (s)."""
+
+    test: TestSpec
+    outcome: Outcome
+    seconds: float
+
+    @property
+    def score(self) -> float:
+        """Full points for a pass; for a failure of a partial-credit test, the points
+        :func:`grader.harness.credit.partial_points` gives its share of right cases; else 0."""
+        if self.outcome.status == "passed":
+            return float(self.test.points)
+        if self.outcome.status != "failed" or not self.test.partial_credit:
+            return 0.0
+        return partial_points(self.test.points, self.outcome.fraction)

@@ -46,19 +46,16 @@ from typing import Callable
 
 import pytest
 
-from .credit import GradedFailure, partial_points
+from .credit import GradedFailure
 from .figures import bounded
-from .outcome import MESSAGE_LIMIT, Outcome, StudentCallFailed, StudentCallStopped, capped
+from .outcome import MESSAGE_LIMIT, Outcome, StudentCallFailed, StudentCallStopped, TestResult, capped
 from .package import PackageNotFound, find_package, package_folder
 from .replay import is_hypothesis_test, replaying
 from ..sandbox.process import Limits, Sandbox, SandboxBroken
-from .spec import EXERCISES, VISIBILITIES, SpecError, TestSpec
+from .spec import EXERCISES, TESTS_DIR, VISIBILITIES, SpecError, TestSpec
 from .student_code import StudentCode
 
 GRADER_DIR = Path(__file__).resolve().parents[1]
-TESTS_DIR = GRADER_DIR / "tests"
-PUBLIC_TESTS = TESTS_DIR / "public"
-HIDDEN_TESTS = TESTS_DIR / "hidden"
 REFERENCE_PACKAGE = GRADER_DIR.parent / "solutions"
 MARKERS = {
     "points": "points(n): the graded test's weight (required)",
@@ -177,25 +174,6 @@ def bound_shrinking() -> None:
 
     engine.MAX_SHRINKS = 200
     engine.MAX_SHRINKING_SECONDS = 3
-
-
-@dataclass
-class TestResult:
-    """A test, what it found, and how long it took (s)."""
-
-    test: TestSpec
-    outcome: Outcome
-    seconds: float
-
-    @property
-    def score(self) -> float:
-        """Full points for a pass; for a failure of a partial-credit test, the points
-        :func:`grader.harness.credit.partial_points` gives its share of right cases; else 0."""
-        if self.outcome.status == "passed":
-            return float(self.test.points)
-        if self.outcome.status != "failed" or not self.test.partial_credit:
-            return 0.0
-        return partial_points(self.test.points, self.outcome.fraction)
 
 
 @dataclass(eq=False)

@@ -15,9 +15,11 @@ from pathlib import Path
 
 from .outcome import Outcome
 from .package import package_folder
-from .plugin import GradedRun, TESTS_DIR, TestResult, forget_tests_imported_elsewhere, note_graded_imports
+from .outcome import TestResult
+from .plugin import GradedRun, forget_tests_imported_elsewhere, note_graded_imports
+from .spec import TESTS_DIR
 from ..sandbox.process import Limits
-from .spec import SpecError, TestSpec
+from .spec import SpecError, TestSpec, graded_test_folders
 
 PYTEST_CONFIG = TESTS_DIR / "pytest.ini"
 AUTOLOAD_VARIABLE = "PYTEST_DISABLE_PLUGIN_AUTOLOAD"
@@ -91,3 +93,15 @@ def run_tests(student_dir: Path, tests: list[TestSpec], limits: Limits = Limits(
             progress(result)
     order = {t.name: i for i, t in enumerate(tests)}
     return sorted(run.results, key=lambda r: order.get(r.test.name, len(order)))
+
+
+_CACHE: dict[tuple, list[TestSpec]] = {}
+
+
+def load_spec(paths: list[Path] | None = None) -> list[TestSpec]:
+    """Every graded test in ``paths`` (default: public, then hidden if present), collected
+    once per process."""
+    key = tuple(str(Path(p).resolve()) for p in (paths or graded_test_folders()))
+    if key not in _CACHE:
+        _CACHE[key] = collect([Path(p) for p in key])
+    return list(_CACHE[key])

@@ -2,7 +2,7 @@
 
 Graded tests are pytest functions (:mod:`grader.harness.plugin`); their points, visibility,
 title and partial-credit rule are pytest markers, so the test modules are the one
-source.  :func:`load_spec` collects them (without running anything) into
+source.  :func:`grader.harness.run.load_spec` collects them (without running anything) into
 :class:`TestSpec` records: ``grader check`` runs the visible ones of an exercise,
 ``grader grade`` runs them all and scores them, the Gradescope results carry each
 test's visibility.  Public tests live in ``grader/tests/public``, which students hold;
@@ -17,6 +17,10 @@ VISIBILITIES = ("visible", "hidden", "after_due_date", "after_published")
 #: The exercises in the order the book teaches them (its chapters 3, 5, 6, 7, 8 and 10):
 #: ``grader check`` lists them in this order.
 EXERCISES = ("grid", "quadtree", "sat", "contacts", "momentum", "impulse", "sequential")
+#: Where the graded tests are: public (students hold them) and hidden (the instructor's).
+TESTS_DIR = Path(__file__).resolve().parents[1] / "tests"
+PUBLIC_TESTS = TESTS_DIR / "public"
+HIDDEN_TESTS = TESTS_DIR / "hidden"
 
 
 class SpecError(ValueError):
@@ -46,19 +50,4 @@ class TestSpec:
 
 def graded_test_folders() -> list[Path]:
     """The folders of graded tests here: public, then hidden when present."""
-    from .plugin import HIDDEN_TESTS, PUBLIC_TESTS
-
     return [folder for folder in (PUBLIC_TESTS, HIDDEN_TESTS) if folder.is_dir()]
-
-
-_CACHE: dict[tuple, list[TestSpec]] = {}
-
-
-def load_spec(paths: list[Path] | None = None) -> list[TestSpec]:
-    """Every graded test in ``paths`` (default: public, then hidden if present)."""
-    from .run import collect
-
-    key = tuple(str(Path(p).resolve()) for p in (paths or graded_test_folders()))
-    if key not in _CACHE:
-        _CACHE[key] = collect([Path(p) for p in key])
-    return list(_CACHE[key])

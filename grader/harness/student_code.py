@@ -16,6 +16,7 @@ import numpy as np
 from ..sandbox import codec
 from .outcome import OUTPUT_LIMIT, Outcome, StudentCallFailed, StudentCallStopped, capped_output
 from ..sandbox.process import CallResult, Sandbox
+from .compare import call_text
 
 #: The marker the worker puts after a call's printed output when it cut some (worker.CappedText).
 WORKER_CUT = re.compile(r"\n\[\.\.\. (\d+) more characters not shown\]$")
@@ -111,8 +112,6 @@ class StudentCode:
             result.message = result.message[raised.end():]
             index = int(raised[1])
             if index < len(cases):
-                from ..oracles.narrowphase_answers import call_text
-
                 case = f"on the case {call_text(function, *(encode(a) for a in cases[index]))}"
         values = self.value_of(result, f"{module}.{function}", case)
         if not isinstance(values, list) or len(values) != len(cases):

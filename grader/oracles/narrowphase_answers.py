@@ -17,8 +17,8 @@ import math
 
 import numpy as np
 
-from ..sandbox.codec import CONTACT_TAG, SHAPE_TAG, NotPlainData, check_feature_ids, decode_feature_ids
-from ..harness.compare import as_number, as_vector, boolean, show
+from ..sandbox.codec import CONTACT_TAG, NotPlainData, check_feature_ids, decode_feature_ids
+from ..harness.compare import as_number, as_vector, boolean, number_text, show
 
 #: Contacts match within this (m): the oracle and a right answer compute the same
 #: closed forms in doubles (they agree to about 1e-15 m on shapes of about 1 m), while a
@@ -26,35 +26,6 @@ from ..harness.compare import as_number, as_vector, boolean, show
 CONTACT_ATOL = 1e-7
 #: A normal must have length 1 within this (a normalised double is within 1e-15).
 UNIT_ATOL = 1e-9
-
-
-def number_text(value: float) -> str:
-    return f"{value:.10g}"
-
-
-def shape_text(shape: dict) -> str:
-    """A plain shape as the constructor call that rebuilds it (m, rad)."""
-    kind = shape.get(SHAPE_TAG)
-
-    def xy(v):
-        return "(" + ", ".join(number_text(float(x)) for x in v) + ")"
-
-    if kind == "Circle":
-        return f"Circle(center={xy(shape['center'])}, radius={number_text(shape['radius'])})"
-    if kind == "AABB":
-        return f"AABB(min_corner={xy(shape['min_corner'])}, max_corner={xy(shape['max_corner'])})"
-    if kind == "OBB":
-        return (f"OBB(center={xy(shape['center'])}, half_extents={xy(shape['half_extents'])}, "
-                f"angle={number_text(shape['angle'])})")
-    if kind == "ConvexPolygon":
-        return "ConvexPolygon([" + ", ".join(xy(v) for v in shape["vertices"]) + "])"
-    return show(shape)
-
-
-def call_text(function: str, *args) -> str:
-    """``function(A, B)`` with the shapes written out, for failure messages."""
-    return f"{function}(" + ", ".join(shape_text(a) if isinstance(a, dict) and SHAPE_TAG in a else show(a)
-                                      for a in args) + ")"
 
 
 def contact_text(contact: dict | None) -> str:

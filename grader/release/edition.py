@@ -61,6 +61,8 @@ GRADER_DIR = Path(__file__).resolve().parents[1]
 REPO_ROOT = GRADER_DIR.parent
 TEMPLATES = Path(__file__).resolve().parent / "files"
 from ..student.update import CHANGELOG, MARKER, MARKER_FORMAT, parse_changelog, version_key, write_originals
+from .gradescope import build_autograder_zip
+from ..harness.spec import EXERCISES
 STUDENT_PROJECT = "collision-course-student"
 
 #: What of ``grader/`` ships to students: these role folders whole (they import nothing
@@ -308,7 +310,7 @@ def text_keys(text: str) -> list[str]:
 def texts_of_file(name: str, data: bytes) -> list[str]:
     """Every text a file holds: zip members (recursively), a notebook's cells and
     outputs, a JSON file's strings, or the decoded file."""
-    from .book import notebook_texts
+    from .book import notebook_texts  # deferred: nbformat, only when the student edition is written
 
     if name.endswith(".zip") or data[:4] == b"PK\x03\x04":
         texts = []
@@ -497,7 +499,7 @@ def changed_files(repo_root: Path = REPO_ROOT) -> list[str]:
 def tools_files(modules: list[str], tools_dir: Path) -> dict[str, str]:
     """The ``tools`` modules the chapters import, and the ``tools`` modules they import:
     {file relative to tools/: source rewritten to import ``exercises``}."""
-    from .book import check_code, rewrite_code
+    from .book import check_code, rewrite_code  # deferred: nbformat, only when the student edition is written
 
     out: dict[str, str] = {}
     queue = [m.split(".")[1:] for m in modules if m.split(".")[1:]]
@@ -570,8 +572,7 @@ def exercises_out_of_date(repo_root: Path = REPO_ROOT) -> str | None:
 
 def write_student(target: Path, repo_root: Path = REPO_ROOT) -> dict:
     """Write the student edition into the empty folder ``target``; return what it holds."""
-    from .book import imported_modules, write_book
-    from ..harness.spec import EXERCISES
+    from .book import imported_modules, write_book  # deferred: nbformat, only when the student edition is written
 
     repo_root = Path(repo_root)
     grader_dir = repo_root / "grader"
@@ -668,7 +669,7 @@ def release_version(repo_root: Path = REPO_ROOT) -> tuple[str | None, str | None
 
 def verify_student(folder: Path, blocks: list[SolutionBlock]) -> None:
     """ReleaseError unless ``folder`` reveals no solution (see the module docstring)."""
-    from .book import SOURCE_PACKAGE, check_code
+    from .book import SOURCE_PACKAGE, check_code  # deferred: nbformat, only when the student edition is written
 
     problems = []
     for path in _files(folder):
@@ -710,7 +711,6 @@ def _marker(folder: Path, edition: str, created: str, commit: str | None, dirty:
 
 def build_release(out: str | os.PathLike, repo_root: Path = REPO_ROOT) -> Release:
     """Write ``out/student`` and ``out/autograder`` (see the module docstring)."""
-    from .gradescope import build_autograder_zip
 
     start = time.perf_counter()
     repo_root = Path(repo_root).resolve()

@@ -50,6 +50,8 @@ from ..sandbox.isolation import isolation_words
 from .module_graph import files_reached, ignored, third_party_modules
 from .pins import locked, pins_for_modules
 from ..reports.results import RESULTS_NAME, write_results
+from ..harness.spec import SpecError
+from ..errors import GradingError
 
 GRADER_DIR = Path(__file__).resolve().parents[1]
 REPO_ROOT = GRADER_DIR.parent
@@ -258,9 +260,7 @@ def run_autograder(root: str | os.PathLike | None = None, isolation: str = "auto
     When the grader itself fails, no results.json is written (Gradescope then tells the
     student the autograder failed) and the reason is printed.
     """
-    from ..errors import GradingError
-    from ..batch.grade import DEFAULT_PER_SUBMISSION_SECONDS, grade_submissions
-    from ..harness.spec import SpecError
+    from ..batch.grade import DEFAULT_PER_SUBMISSION_SECONDS, grade_submissions  # deferred: the grading machinery, not needed to build the archive
 
     root = Path(root) if root is not None else autograder_root()
     submission = root / "submission"
@@ -306,7 +306,7 @@ def check_setup(source: Path = REPO_ROOT) -> int:
     load the graded tests; 0 when all is there, else 1 with what is missing."""
     import importlib
 
-    from ..harness.spec import SpecError, load_spec
+    from ..harness.run import load_spec  # deferred: pytest, heavy to import
 
     files = [(path.relative_to(source).as_posix(), path) for path in sorted(source.rglob("*.py"))
              if path.is_file() and not _hidden(path.relative_to(source))

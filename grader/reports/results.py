@@ -44,7 +44,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ..harness.outcome import STATUS_MEANINGS, Outcome, capped
+from ..harness.outcome import STATUS_MEANINGS, Outcome, TestResult, capped
 from ..harness.spec import VISIBILITIES, TestSpec
 
 #: Gradescope's test statuses.
@@ -166,7 +166,7 @@ def picture_html(figure: dict | None, alt: str, limit: int | None = None) -> str
         reason = str(figure.get("reason") or "it was left out")
         return f"<p><em>No picture of the failing case: {html.escape(reason, quote=False)}.</em></p>"
     try:
-        from ..harness.figures import figure_png_base64
+        from ..harness.figures import figure_png_base64  # deferred: matplotlib, heavy to import
 
         data = figure_png_base64(figure)
     except Exception as exc:  # a damaged figure must not cost the output
@@ -198,13 +198,11 @@ def output_text(entry: dict) -> str:
 def results_entry(test: TestSpec, outcome: Outcome, seconds: float = 0.0) -> dict:
     """One entry of ``tests``: Gradescope's keys plus ``extra_data`` for the reports.
 
-    The score follows the test's credit rule (:attr:`grader.harness.plugin.TestResult.score`):
+    The score follows the test's credit rule (:attr:`grader.harness.outcome.TestResult.score`):
     full points for a pass, partial points only for a test marked partial_credit.  A
     failed test with a figure gets an HTML output holding its picture (see the module
     docstring); every other test a text output.
     """
-    from ..harness.plugin import TestResult
-
     fraction = max(0.0, min(1.0, float(outcome.fraction)))
     score = round(TestResult(test, outcome, seconds).score, 6)
     text = student_output(outcome, score, test.points)

@@ -42,6 +42,7 @@ import sys
 import textwrap
 from dataclasses import dataclass
 from pathlib import Path
+from ..sandbox.process import Sandbox
 
 REPO_ROOT = Path(__file__).resolve().parent.parent.parent
 SOLUTIONS_DIR = REPO_ROOT / "solutions"
@@ -1761,8 +1762,7 @@ def grade_probe(tests, out_dir: Path, slot: int = 0,
     the other, so what is printed between two tests' ends belongs to the later one.
     The results are the reference's own (the probe only prints): every test passes.
     """
-    from ..harness.run import run_tests
-    from ..sandbox.process import Sandbox
+    from ..harness.run import run_tests  # deferred: pytest, heavy to import
 
     folder, codes = build_probe(out_dir)
     printed: list[str] = []
@@ -1811,7 +1811,7 @@ def add_example_class_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main_example_class(args: argparse.Namespace) -> int:
-    from ..harness.spec import load_spec
+    from ..harness.run import load_spec  # deferred: pytest, heavy to import
 
     tests = load_spec()
     total = sum(t.points for t in tests)
@@ -1840,7 +1840,7 @@ def grade_table(tests, folders: dict[str, Path], all_tests: bool = False, slot: 
     import tempfile
     import time
 
-    from ..harness.run import run_tests
+    from ..harness.run import run_tests  # deferred: pytest, heavy to import
 
     total = sum(t.points for t in tests)
     reached = None

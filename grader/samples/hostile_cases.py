@@ -1168,7 +1168,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sentinel", default="/nonexistent-sentinel", help="folder the hostile writes aim at")
     args = parser.parse_args(argv)
     paths = build_cases(args.out, {"OUT": args.grading_out, "SENTINEL": args.sentinel})
-    from ..harness.spec import load_spec
+    from ..harness.run import load_spec  # deferred: pytest, heavy to import
 
     print(table(tests=load_spec()))
     print(f"\nwrote {len(paths)} cases to {args.out}")

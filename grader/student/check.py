@@ -41,6 +41,7 @@ from pathlib import Path
 from ..harness.outcome import STATUS_MEANINGS
 from ..harness.package import COURSE_ROOT as REPO_ROOT
 from ..harness.package import PACKAGE_VARIABLE, PackageNotFound, find_package
+from ..harness.spec import EXERCISES
 #: The file at the top of a student edition (written by ``grader release``).
 RELEASE_MARKER = ".course-release.json"
 #: Folder (under the system's temporary folder) where the shell command saves pictures.
@@ -164,7 +165,7 @@ class CheckReport:
 
     def html(self) -> str:
         """A self-contained HTML table (inline styles, figures as inline PNG)."""
-        from ..harness.figures import figure_png_base64
+        from ..harness.figures import figure_png_base64  # deferred: matplotlib, heavy to import
 
         cell = "text-align:left; vertical-align:top; padding:6px 10px; border-bottom:1px solid #d0d7de;"
         out = ['<div style="font-family: system-ui, sans-serif; font-size: 14px;">',
@@ -289,7 +290,7 @@ def format_row(row: CheckRow, color: bool = False, width: int = 100, show_output
 
 def save_row_figure(row: CheckRow, folder: Path) -> Path | None:
     """Save a failing row's picture (and remove a stale one); return its path or None."""
-    from ..harness.figures import save_figure
+    from ..harness.figures import save_figure  # deferred: matplotlib, heavy to import
 
     path = Path(folder) / f"{row.name}.png"
     if row.figure is None or row.passed:
@@ -318,7 +319,7 @@ def default_figures_folder() -> Path:
 
 def select_tests(exercise: str | None = None) -> list:
     """The public tests of ``exercise`` (an exercise name or one test's name; None: all)."""
-    from ..harness.spec import EXERCISES, load_spec
+    from ..harness.run import load_spec  # deferred: pytest, heavy to import
 
     # In chapter order (EXERCISES), each exercise's tests in the order of their module.
     public = sorted((t for t in load_spec() if t.public), key=lambda t: EXERCISES.index(t.exercise))
@@ -344,7 +345,7 @@ def row_of(result) -> CheckRow:
 
 def run_check(exercise: str | None = None, package: str | Path | None = None, progress=None) -> CheckReport:
     """Run the public tests and return the report; ``progress(row)`` after each test."""
-    from ..harness.run import run_tests
+    from ..harness.run import run_tests  # deferred: pytest, heavy to import
 
     tests = select_tests(exercise)
     folder = find_package(package)
@@ -425,7 +426,6 @@ def _use_color(stream) -> bool:
 
 def add_check_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """Add ``[EXERCISE] [--package PATH] [--figures DIR]`` to ``parser``; return it."""
-    from ..harness.spec import EXERCISES
 
     parser.add_argument("exercise", nargs="?", default=None,
                         help=f"{', '.join(EXERCISES[:-1])} or {EXERCISES[-1]} (or one test's name); "
@@ -467,7 +467,7 @@ def main_check(args: argparse.Namespace) -> int:
         report.rows.append(row)
         print(format_row(row, color, width, report.show_output), file=out, flush=True)
 
-    from ..harness.run import run_tests
+    from ..harness.run import run_tests  # deferred: pytest, heavy to import
 
     try:
         report.results = run_tests(folder, tests, reference_dir=None, progress=show_row)

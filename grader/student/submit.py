@@ -49,6 +49,8 @@ from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
 
+from ..harness.package import PackageNotFound, find_package
+from .check import CheckError, command_name, run_check
 from .manifest import (COURSE_NAME, IGNORED_NAMES, MANIFEST_FORMAT, MANIFEST_NAME, MANIFEST_VERSION, MAX_FILES,
                           MAX_TOTAL_BYTES, submission_id)
 
@@ -275,8 +277,6 @@ def submit(name: str | None = None, package: str | os.PathLike | None = None, ou
     SubmitError
         For a symbolic link or a special file in the package, or too many files or bytes.
     """
-    from .check import find_package
-
     folder = find_package(package)
     score = maximum = None
     if check:
@@ -294,8 +294,6 @@ def submit(name: str | None = None, package: str | os.PathLike | None = None, ou
 
 def _run_checks(folder: Path, show: bool) -> tuple[float | None, float | None]:
     """Run every public test on ``folder``; (score, max score), or (None, None) if they could not run."""
-    from .check import run_check
-
     if show:
         print("running the public tests first ...", flush=True)
     try:
@@ -327,11 +325,9 @@ def add_submit_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentPa
 
 def main_submit(args: argparse.Namespace) -> int:
     """Run ``grader submit``: 0 when the zip is written, 2 when it cannot be."""
-    from .check import CheckError
-
     try:
         submit(name=args.name, package=args.package, out=args.out, check=args.check)
-    except (CheckError, SubmitError) as exc:
+    except (CheckError, PackageNotFound, SubmitError) as exc:
         print(f"grader submit: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:
@@ -342,8 +338,6 @@ def main_submit(args: argparse.Namespace) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m grader.student.submit [--name NAME] [--out PATH] [--package PATH] [--check]``."""
-    from .check import command_name
-
     parser = add_submit_arguments(argparse.ArgumentParser(
         prog=command_name("submit"), description="Write the zip to hand in: your exercises and a manifest of their hashes."))
     return main_submit(parser.parse_args(argv))

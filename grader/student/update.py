@@ -57,6 +57,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 from typing import Iterator
+from .manifest import SubmissionRefused, safe_extract
 
 #: The marker of a release folder, and its format (see :mod:`grader.release.edition`).
 MARKER = ".course-release.json"
@@ -252,7 +253,6 @@ def opened_release(path: str | os.PathLike) -> Iterator[Path]:
     if path.is_dir():
         yield release_folder(path)
         return
-    from .manifest import SubmissionRefused, safe_extract
 
     with tempfile.TemporaryDirectory(prefix="course-release-") as scratch:
         try:

@@ -25,7 +25,8 @@ from grader.harness.credit import check_cases
 from grader.oracles import narrowphase_cases as cases
 from grader.oracles import plain
 from grader.oracles import random_cases as rc
-from grader.oracles.narrowphase_answers import call_text, contact_problem, pair_figure, without_feature_ids
+from grader.harness.compare import call_text
+from grader.oracles.narrowphase_answers import contact_problem, pair_figure, without_feature_ids
 from grader.oracles.pymunk_geometry import definite_overlap
 
 AABBS = "narrowphase.aabb_aabb"

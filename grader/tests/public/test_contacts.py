@@ -35,7 +35,8 @@ from grader.oracles import narrowphase_cases as cases
 from grader.oracles import plain
 from grader.oracles import random_cases as rc
 from grader.oracles.brute_sat import contact_is_defined
-from grader.oracles.narrowphase_answers import (call_text, contact_problem, contact_text, pair_figure,
+from grader.harness.compare import call_text
+from grader.oracles.narrowphase_answers import (contact_problem, contact_text, pair_figure,
                                                 with_feature_ids)
 from grader.oracles.pymunk_geometry import definite_overlap, pymunk_contact
 

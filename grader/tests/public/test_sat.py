@@ -28,7 +28,8 @@ from grader.harness.shrink import smallest_failure
 from grader.oracles import narrowphase_cases as cases
 from grader.oracles import plain
 from grader.oracles import random_cases as rc
-from grader.oracles.narrowphase_answers import boolean_problem, call_text, pair_figure
+from grader.harness.compare import call_text
+from grader.oracles.narrowphase_answers import boolean_problem, pair_figure
 from grader.oracles.pymunk_geometry import definite_overlap
 
 PROJECTION = "narrowphase.projection"

@@ -71,5 +71,12 @@ def test_a_graded_test_without_points_is_refused(tmp_path):
 
 
 def test_partial_credit_rule():
-    assert partial_points(2.0, 0.89) == 0 and partial_points(2.0, 0.9) == 1.0
-    assert partial_points(2.0, 0.95) == pytest.approx(1.5) and partial_points(2.0, 1.0) < 2.0
+    assert partial_points(2.0, 0.89) == 0 and partial_points(2.0, 0.9) == 0.5
+    assert partial_points(2.0, 0.95) == pytest.approx(0.75)
+
+
+def test_a_failed_test_keeps_at_most_half_its_points():
+    # The four failures of issue 24 kept 1.87/2, 2.5/3, 1.97/2 and 1.04/2.
+    for points in (1.0, 2.0, 3.0):
+        for fraction in (0.9, 0.95, 0.99, 0.999999, 1.0):
+            assert partial_points(points, fraction) <= points / 2

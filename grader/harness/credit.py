@@ -4,8 +4,9 @@ cases (partial credit) and a picture of the failing case.
 A plain ``assert`` fails a test with no credit.  A test over many cases calls
 :func:`check_cases`, which fails with the share of right cases; that share earns
 points only when the test is marked ``@pytest.mark.partial_credit`` and only above
-:data:`PARTIAL_CREDIT_FLOOR`: a systematic bug (one that breaks a whole category of
-cases) loses at least half the points, and a constant answer earns nothing.
+:data:`PARTIAL_CREDIT_FLOOR`, and never more than :data:`FAILED_TEST_CAP` of them: a failed
+test keeps at most half its points, a systematic bug (one that breaks a whole category
+of cases) loses them all, and a constant answer earns nothing.
 """
 from __future__ import annotations
 
@@ -13,8 +14,12 @@ from typing import Callable, Iterable
 
 #: Below this share of right cases a partial-credit test earns nothing at all.
 PARTIAL_CREDIT_FLOOR = 0.9
-#: Points earned at the floor, as a share of the test's points (rises linearly to 1).
-SHARE_AT_FLOOR = 0.5
+#: Points earned at the floor, as a share of the test's points (rises linearly towards
+#: :data:`FAILED_TEST_CAP` as the share of right cases reaches 1).
+SHARE_AT_FLOOR = 0.25
+#: The most a failed test keeps, as a share of its points: a test that finds a bug
+#: costs at least half its points, however rare the failing cases.
+FAILED_TEST_CAP = 0.5
 
 
 class GradedFailure(AssertionError):
@@ -35,13 +40,14 @@ def partial_points(points: float, fraction: float) -> float:
     """Points of a failed partial-credit test that got ``fraction`` of its cases right.
 
     Nothing below :data:`PARTIAL_CREDIT_FLOOR`; from :data:`SHARE_AT_FLOOR` of the
-    points at the floor up to (but never reaching) full points at 1.
+    points at the floor rising linearly to :data:`FAILED_TEST_CAP` (half) at 1.
     """
     if not fraction >= PARTIAL_CREDIT_FLOOR:
         return 0.0
     fraction = min(1.0, fraction)
-    share = SHARE_AT_FLOOR + (1 - SHARE_AT_FLOOR) * (fraction - PARTIAL_CREDIT_FLOOR) / (1 - PARTIAL_CREDIT_FLOOR)
-    return round(points * min(share, 0.99), 6)
+    rise = (fraction - PARTIAL_CREDIT_FLOOR) / (1 - PARTIAL_CREDIT_FLOOR)
+    share = SHARE_AT_FLOOR + (FAILED_TEST_CAP - SHARE_AT_FLOOR) * rise
+    return round(points * min(share, FAILED_TEST_CAP), 6)
 
 
 def check_cases(cases: Iterable, problem_of: Callable, label: str, describe: Callable | None = None,

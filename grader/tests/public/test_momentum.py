@@ -131,11 +131,26 @@ BAD_INPUTS = [("collision_1d", (0.0, 1.0, 1.0, 0.0, 0.5), "a mass of 0"),
               ("elastic_collision_1d", (1.0, 1.0, 0.0, 0.0), "a mass of 0"),
               ("perfectly_inelastic_1d", (math.inf, 1.0, math.inf, 0.0), "two infinite masses"),
               ("perfectly_inelastic_1d", (1.0, 1.0, 2.0, math.nan), "a NaN velocity")]
+#: Input on the edge of what is allowed, that must be accepted: a function that refuses
+#: everything must not pass the test of refusals.
+GOOD_INPUTS = [("collision_1d", (1.0, 1.0, 1.0, 0.0, 0.0), "e = 0"),
+               ("collision_1d", (1.0, 1.0, 1.0, 0.0, 1.0), "e = 1"),
+               ("collision_1d", (math.inf, 1.0, 2.0, 0.0, 0.5), "one infinite mass"),
+               ("collision_1d", (1e-6, 0.0, 1e6, 0.0, 0.5), "tiny and huge masses at rest"),
+               ("elastic_collision_1d", (2.0, -1.0, 3.0, 4.0), "two ordinary bodies"),
+               ("perfectly_inelastic_1d", (1.0, 1.0, math.inf, 0.0), "one infinite mass")]
 
 
 @pytest.mark.points(1)
 def test_rejects_bad_input(student):
-    """Bad masses, velocities and restitution raise ValueError (as the docstrings say)"""
+    """Bad masses, velocities and restitution raise ValueError (as the docstrings say);
+    input on the edge of what is allowed is accepted"""
+    for function, args, what in GOOD_INPUTS:
+        result = student.raw(MODULE, function, *args)
+        if result.status in ("not_implemented", "timeout", "crashed"):
+            student.value_of(result, f"{MODULE}.{function}")  # stops the test with that status
+        assert result.ok, (f"{function}{show(args)} ({what}) is allowed input and must return velocities, "
+                           f"raised: {result.message.strip()[-300:]}")
     for function, args, what in BAD_INPUTS:
         result = student.raw(MODULE, function, *args)
         if result.status in ("not_implemented", "timeout", "crashed"):

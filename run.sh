@@ -83,7 +83,7 @@ case "$command" in
         ;;
     test)
         setup
-        "$PY" -m tools.generate_exercises --check
+        "$PY" -m grader.release.exercises --check
         "$PY" -m tools.book check
         # --dist loadgroup: the book's tests share one build on one worker.
         # COURSE_RELEASE_VENV=1: the student edition's set-up command is run into a fresh

@@ -4,7 +4,7 @@ The instructor's package (``solutions``) has numpy and numba twins of the narrow
 and of the solver (batch SAT and clipping of boxes, the compiled kernel, the soft step
 compiled whole), each tested equal to the readable code.  They compute what the
 exercises compute, so the student package (``exercises``, made by
-``tools/generate_exercises.py``) leaves them out and steps the world with the readable
+``grader/release/exercises.py``) leaves them out and steps the world with the readable
 code: the same motion, to rounding, only slower.
 
 >>> isinstance(HAS_TWINS, bool)

@@ -569,14 +569,14 @@ EXPECTED_STUBS = {
 
 
 def test_solution_markers_are_where_expected():
-    generator = pytest.importorskip("tools.generate_exercises")
+    generator = pytest.importorskip("grader.release.exercises")
     for path in sorted(BROADPHASE_DIR.glob("*.py")):
         _, stubbed = generator.strip_solutions(path.read_text(), f"solutions/broadphase/{path.name}")
         assert stubbed == EXPECTED_STUBS.get(path.name, []), path.name
 
 
 def test_student_copy_imports_and_raises_not_implemented(tmp_path):
-    generator = pytest.importorskip("tools.generate_exercises")
+    generator = pytest.importorskip("grader.release.exercises")
     package = f"exercises_probe_{uuid.uuid4().hex[:8]}"
     shutil.copytree(SOLUTIONS_DIR, tmp_path / package, ignore=shutil.ignore_patterns("__pycache__"))
     for path in (tmp_path / package / "broadphase").glob("*.py"):

@@ -230,7 +230,7 @@ def stale_commands(snippets) -> list[str]:
     return problems
 
 
-DOTTED = re.compile(r"\b((?:grader|solutions|exercises|tools)(?:\.\w+)+)(?![\w/-])")
+DOTTED = re.compile(r"(?<![\w/.-])((?:grader|solutions|exercises|tools)(?:\.\w+)+)(?![\w/-])")
 FROM_IMPORT = re.compile(r"\bfrom\s+([\w.]+)\s+import\s+(\w+(?:\s*,\s*\w+)*)")
 
 
@@ -298,7 +298,7 @@ def test_the_pages_show_commands_and_paths():
     assert {"main", "test", "bench"} <= {c for s, c in shown_run_sh(snippets) if not s.student}
     assert {"setup", "check", "lab", "submit", "update"} <= {c for s, c in shown_run_sh(snippets) if s.student}
     assert {"release", "grade"} <= {c for _, c in shown_grader(snippets)}
-    assert {"tools.book", "tools.generate_exercises", "tools.mutation"} <= {m for _, m, _ in shown_modules(snippets)}
+    assert {"tools.book", "grader.release.exercises", "tools.mutation"} <= {m for _, m, _ in shown_modules(snippets)}
     assert len([w for s in snippets for w in path_words(s)]) > 50
 
 

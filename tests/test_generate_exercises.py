@@ -11,7 +11,7 @@ import textwrap
 
 import pytest
 
-from tools import generate_exercises as gen
+from grader.release import exercises as gen
 
 #: The exercises the course promises students (module, qualname), at least.
 REQUIRED_STUBS = {
@@ -41,7 +41,7 @@ def generated():
 def test_committed_exercises_match_the_generator(generated):
     files, _ = generated
     problems = gen.check(files, gen.REPO_ROOT / gen.TARGET_PACKAGE)
-    assert not problems, "run `python -m tools.generate_exercises` (it refuses to overwrite edits):\n" + \
+    assert not problems, "run `python -m grader.release.exercises` (it refuses to overwrite edits):\n" + \
         "\n".join(problems)
 
 
@@ -165,7 +165,7 @@ def test_every_stub_of_the_course_names_its_exercise(generated):
 
     _, stubs = generated
     unnamed = [f"{s.module}.{s.qualname}" for s in stubs if s.exercise not in EXERCISES]
-    assert not unnamed, f"add these stubs to tools/generate_exercises.py EXERCISES: {unnamed}"
+    assert not unnamed, f"add these stubs to grader/release/exercises.py EXERCISES: {unnamed}"
     by_name = {(s.module, s.qualname): s.exercise for s in stubs}
     assert by_name["exercises.broadphase.quadtree", "Quadtree.insert"] == "quadtree"
     assert by_name["exercises.narrowphase.aabb_aabb", "aabbs_overlap"] == "sat"

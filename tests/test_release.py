@@ -96,7 +96,7 @@ def test_the_student_edition_has_no_twins_and_steps_with_the_students_code(relea
     """The numpy and numba twins compute what exercises compute: they stay on the
     instructor's side, and the student's world runs the readable stages, the student's
     own clipping included."""
-    from tools.generate_exercises import is_instructor_only
+    from grader.release.exercises import is_instructor_only
 
     twins = sorted(p.relative_to(REPO / "solutions").as_posix() for p in (REPO / "solutions").rglob("*.py")
                    if is_instructor_only(p.read_text()))

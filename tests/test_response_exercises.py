@@ -1,6 +1,6 @@
 """The student copy of solutions/response, built with the project's generator.
 
-tools/generate_exercises.py turns each ``### BEGIN SOLUTION`` ... ``### END SOLUTION``
+grader/release/exercises.py turns each ``### BEGIN SOLUTION`` ... ``### END SOLUTION``
 block into ``raise NotImplementedError``; tests/test_generate_exercises.py checks the
 markers and stubs of the whole package.  Here: exactly the response and solver
 exercises are stubbed, and what students are given unmarked (helpers, the
@@ -14,7 +14,7 @@ import sys
 import numpy as np
 import pytest
 
-from tools import generate_exercises as gen
+from grader.release import exercises as gen
 
 STUBBED = {
     "exercises.response.momentum_1d": {"collision_1d", "elastic_collision_1d", "perfectly_inelastic_1d"},

@@ -398,7 +398,7 @@ def test_run_sh_update_takes_a_path_relative_to_where_it_was_called(release, tmp
 
 def test_the_grader_knows_a_library_file_by_the_header_the_generator_writes():
     from grader.batch.submissions import LIBRARY_HEADER as KNOWN
-    from tools.generate_exercises import EXERCISE_HEADER, LIBRARY_HEADER, header
+    from grader.release.exercises import EXERCISE_HEADER, LIBRARY_HEADER, header
 
     assert header("solutions/vector.py").startswith(KNOWN)
     assert not header("solutions/x.py", [("f", "sat")]).startswith(KNOWN)

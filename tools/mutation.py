@@ -55,7 +55,7 @@ KEPT_OPERATORS = re.compile(
 def exercise_of(module: str, function: str) -> str:
     """The exercise a mutated function belongs to: the generator's table, which also
     names the ``grader check`` command in each stub (one table for both)."""
-    from tools.generate_exercises import exercise_of as table_exercise
+    from grader.release.exercises import exercise_of as table_exercise
 
     return table_exercise(module, function) or table_exercise(module, function.split(".")[-1]) or "other"
 
@@ -149,7 +149,7 @@ def _start_worker(slots) -> None:
 
 
 def _graded_tests():
-    from grader.harness.spec import load_spec
+    from grader.harness.run import load_spec
 
     return load_spec()
 

@@ -539,7 +539,7 @@ def opened(submission: Submission, workdir: str | os.PathLike | None = None,
 
 # The course's library files -------------------------------------------------------------------
 #: The first words of a library file of the ``exercises`` package (the header
-#: tools/generate_exercises.py writes: ``LIBRARY_HEADER``); an exercise file starts with
+#: grader/release/exercises.py writes: ``LIBRARY_HEADER``); an exercise file starts with
 #: "# Exercise file".  A file is classed by the course's copy, never the submission's.
 LIBRARY_HEADER = "# Library file of the collision course"
 

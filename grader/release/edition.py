@@ -53,6 +53,9 @@ from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
 
+from .exercises import SOURCE_PACKAGE, TARGET_PACKAGE, GeneratorError
+from .exercises import check as check_generated
+from .exercises import generate as generate_exercises
 from .module_graph import files_reached, ignored, module_file
 from .module_graph import imported_modules as third_party_imports
 from .pins import installed_closure, normal_name, requirement_name
@@ -440,7 +443,7 @@ def _copy_tree(source: Path, target: Path) -> list[Path]:
 
 #: The grader's commands as the student edition's README teaches them (its run.sh's).
 STUDENT_COMMANDS_NAMED = {"`grader check": "`bash run.sh check", "`grader submit": "`bash run.sh submit"}
-#: The generator's record of the files it wrote (tools/generate_exercises.py), kept true.
+#: The generator's record of the files it wrote (grader/release/exercises.py), kept true.
 GENERATED_RECORD = ".generated.json"
 
 
@@ -557,17 +560,17 @@ class Release:
 
 def exercises_out_of_date(repo_root: Path = REPO_ROOT) -> str | None:
     """A warning when ``exercises/`` is not what the generator makes from ``solutions/``
-    (``python -m tools.generate_exercises --check``), else None."""
+    (``python -m grader.release.exercises --check``), else None."""
+    repo_root = Path(repo_root)
     try:
-        result = subprocess.run([sys.executable, "-m", "tools.generate_exercises", "--check"], cwd=repo_root,
-                                capture_output=True, text=True, timeout=300)
-    except (OSError, subprocess.SubprocessError) as exc:
+        files, _ = generate_exercises(repo_root / SOURCE_PACKAGE)
+    except GeneratorError as exc:
         return f"could not check that exercises/ is up to date ({exc})"
-    if result.returncode == 0:
+    problems = check_generated(files, repo_root / TARGET_PACKAGE)
+    if not problems:
         return None
-    said = (result.stdout + result.stderr).strip().splitlines() or [f"exit status {result.returncode}"]
-    return ("exercises/ is not what `python -m tools.generate_exercises` makes from solutions/ (the release "
-            f"copies it as it is): {said[0][:300]}")
+    return ("exercises/ is not what `python -m grader.release.exercises` makes from solutions/ (the release "
+            f"copies it as it is): {problems[0][:300]}")
 
 
 def write_student(target: Path, repo_root: Path = REPO_ROOT) -> dict:
@@ -578,7 +581,7 @@ def write_student(target: Path, repo_root: Path = REPO_ROOT) -> dict:
     grader_dir = repo_root / "grader"
     target.mkdir(parents=True)
     if not (repo_root / "exercises" / "__init__.py").is_file():
-        raise ReleaseError(f"{repo_root / 'exercises'} is not a package: run `python -m tools.generate_exercises`")
+        raise ReleaseError(f"{repo_root / 'exercises'} is not a package: run `python -m grader.release.exercises`")
     _copy_tree(repo_root / "exercises", target / "exercises")
     name_student_commands(target / "exercises")
     grader_files = student_grader_files(grader_dir)

@@ -23,9 +23,9 @@ beside it.
 
 Usage::
 
-    python -m tools.generate_exercises            # rewrite exercises/ (refused if it holds edits)
-    python -m tools.generate_exercises --force    # the same, keeping a backup of an edited tree
-    python -m tools.generate_exercises --check    # exit 1 if exercises/ differs from what it makes
+    python -m grader.release.exercises            # rewrite exercises/ (refused if it holds edits)
+    python -m grader.release.exercises --force    # the same, keeping a backup of an edited tree
+    python -m grader.release.exercises --check    # exit 1 if exercises/ differs from what it makes
 
 Errors (exit status 2) name the file and line: a nested BEGIN, an END without BEGIN,
 a BEGIN never closed, a marker outside a function body, an empty block, an absolute
@@ -56,7 +56,7 @@ END_MARKER = "### END SOLUTION"
 STUB_LINE = "raise NotImplementedError"
 SOURCE_PACKAGE = "solutions"
 TARGET_PACKAGE = "exercises"
-REPO_ROOT = Path(__file__).resolve().parent.parent
+REPO_ROOT = Path(__file__).resolve().parents[2]
 #: What the generator last wrote, in the target folder: {"sha256": {relative path: digest}}.
 MANIFEST = ".generated.json"
 #: ``--force`` moves an edited target folder to ``<target>.backup-<BACKUP_STAMP>``.
@@ -390,7 +390,7 @@ def digest(data: bytes | str) -> str:
 def manifest_text(files: dict[str, str]) -> str:
     """The record of ``files`` as the generator writes it: hashes only, no file's text."""
     record = {
-        "about": "SHA-256 of each file tools/generate_exercises.py wrote in this folder. Before it writes "
+        "about": "SHA-256 of each file grader/release/exercises.py wrote in this folder. Before it writes "
                  "again it compares the folder with these and refuses to overwrite a file that differs "
                  "(someone's work); --force keeps a backup first.",
         "sha256": {name: digest(text) for name, text in sorted(files.items())},
@@ -469,9 +469,9 @@ class TreeHasEdits(RuntimeError):
     def __init__(self, target_dir: Path, changes: list[Change], has_record: bool):
         self.target_dir, self.changes = Path(target_dir), changes
         name = self.target_dir.name
-        compared = (f"what tools/generate_exercises.py last wrote there (recorded in {name}/{MANIFEST})"
+        compared = (f"what grader/release/exercises.py last wrote there (recorded in {name}/{MANIFEST})"
                     if has_record else
-                    f"what tools/generate_exercises.py would write (there is no record, {name}/{MANIFEST}, "
+                    f"what grader/release/exercises.py would write (there is no record, {name}/{MANIFEST}, "
                     "of what it last wrote)")
         listed = "\n".join(f"  {c.kind}: {name}/{c.path}" for c in changes)
         super().__init__(
@@ -568,8 +568,8 @@ def main(argv: list[str] | None = None) -> int:
         for problem in problems:
             print(problem, file=sys.stderr)
         if problems:
-            print(f"{name}/ differs from what tools/generate_exercises.py makes from {args.source.name}/.\n"
-                  f"If {args.source.name}/ changed, run `python -m tools.generate_exercises`: it refuses, naming "
+            print(f"{name}/ differs from what grader/release/exercises.py makes from {args.source.name}/.\n"
+                  f"If {args.source.name}/ changed, run `python -m grader.release.exercises`: it refuses, naming "
                   f"the files and writing nothing, when {name}/ holds edits made since it last wrote it "
                   f"(perhaps a student's work). Add --force only if those edits are not wanted: it moves "
                   f"{name}/ to a backup folder first.", file=sys.stderr)

@@ -43,6 +43,7 @@ import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 from ..sandbox.process import Sandbox
+from ..release.exercises import EXERCISES
 
 REPO_ROOT = Path(__file__).resolve().parent.parent.parent
 SOLUTIONS_DIR = REPO_ROOT / "solutions"
@@ -140,8 +141,6 @@ def exercise_of(module: str, qualname: str) -> str:
     >>> exercise_of("narrowphase.polygon_polygon", "reference_face_manifold")
     'contacts'
     """
-    from tools.generate_exercises import EXERCISES
-
     entry = EXERCISES.get(module.replace(".", "/") + ".py", "?")
     return entry if isinstance(entry, str) else entry.get(qualname.split(".")[-1], "?")
 
@@ -1642,7 +1641,7 @@ def sample_problems(sample: BuggySample, results) -> list[str]:
 
 #: The folder of the probe: the reference with every exercise function announcing itself.
 PROBE_SAMPLE = "probe"
-#: The line opening a solution block (tools/generate_exercises.py): the functions holding
+#: The line opening a solution block (grader/release/exercises.py): the functions holding
 #: one are the exercises, the only functions a sample rewrites.
 BEGIN_MARKER = "### BEGIN SOLUTION"
 #: The probe's exercise functions print this mark followed by their one-character code.

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from grader.sandbox.process import Limits, Sandbox, bwrap_available
+from grader.sandbox.isolation import bwrap_available
+from grader.sandbox.process import Limits, Sandbox
 
 REPO = Path(__file__).resolve().parent.parent
 needs_bwrap = pytest.mark.skipif(not bwrap_available(), reason="bubblewrap isolation needs bwrap and root")
@@ -161,12 +162,122 @@ def sneaky():
 '''
 
 
+#: Channels between two submissions through what every sandbox mounts read-only: bits
+#: as page-cache residency of a Python file (dropped with posix_fadvise, set by reading a
+#: byte, read back with preadv2(RWF_NOWAIT) or mincore), bytes as the start offsets of
+#: POSIX read locks on the venv's pyvenv.cfg (listed with F_GETLK), and sockets that
+#: leave the sandbox's own network namespace (AF_VSOCK reaches the host).
+CHANNELS = '''
+import ctypes, fcntl, mmap, os, socket, struct, sys
+
+PAGE = mmap.PAGESIZE
+BITS = 16
+held = []  # descriptors whose locks outlive the call
+
+def cache_file():
+    import pydoc_data
+    return os.path.join(os.path.dirname(pydoc_data.__file__), "topics.py")
+
+def write_cache(token):
+    """Page k of the file in the page cache when bit k of token is set, else not."""
+    fd = os.open(cache_file(), os.O_RDONLY)
+    try:
+        os.posix_fadvise(fd, 0, 0, os.POSIX_FADV_DONTNEED)
+        os.posix_fadvise(fd, 0, 0, os.POSIX_FADV_RANDOM)  # no readahead: one page per read
+        for k in range(BITS):
+            if token >> k & 1:
+                os.pread(fd, 1, k * PAGE)
+        return "written"
+    except OSError as exc:
+        return f"refused: {exc}"
+    finally:
+        os.close(fd)
+
+def read_cache():
+    """The token as page-cache residency says it, by mincore and by preadv2(RWF_NOWAIT)."""
+    fd = os.open(cache_file(), os.O_RDONLY)
+    found = {}
+    try:
+        os.posix_fadvise(fd, 0, 0, os.POSIX_FADV_RANDOM)
+    except OSError:
+        pass
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.mmap.restype = ctypes.c_void_p
+        libc.mmap.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int, ctypes.c_int, ctypes.c_int,
+                              ctypes.c_long]
+        address = libc.mmap(None, BITS * PAGE, mmap.PROT_READ, mmap.MAP_SHARED, fd, 0)
+        vector = ctypes.create_string_buffer(BITS)
+        if libc.mincore(ctypes.c_void_p(address), ctypes.c_size_t(BITS * PAGE), vector) != 0:
+            raise OSError(ctypes.get_errno(), os.strerror(ctypes.get_errno()))
+        found["mincore"] = sum((vector.raw[k] & 1) << k for k in range(BITS))
+    except OSError as exc:
+        found["mincore"] = f"refused: {exc}"
+    try:
+        token = 0
+        for k in range(BITS):
+            try:
+                if os.preadv(fd, [bytearray(1)], k * PAGE, os.RWF_NOWAIT) == 1:
+                    token |= 1 << k
+            except BlockingIOError:
+                pass
+        found["preadv2"] = token
+    except OSError as exc:
+        found["preadv2"] = f"refused: {exc}"
+    os.close(fd)
+    return found
+
+def lock_file():
+    return os.path.join(sys.prefix, "pyvenv.cfg")
+
+def write_locks(token):
+    """A read lock of one byte at offset token, held after the call returns."""
+    fd = os.open(lock_file(), os.O_RDONLY)
+    held.append(fd)
+    try:
+        fcntl.lockf(fd, fcntl.LOCK_SH | fcntl.LOCK_NB, 1, token)
+        return "locked"
+    except OSError as exc:
+        return f"refused: {exc}"
+
+def read_locks():
+    """The start offset of a lock another process holds on the file, by F_GETLK."""
+    fd = os.open(lock_file(), os.O_RDONLY)
+    try:
+        asked = struct.pack("hhqqi", fcntl.F_WRLCK, os.SEEK_SET, 0, 0, 0)
+        kind, _, start, _, _ = struct.unpack("hhqqi", fcntl.fcntl(fd, fcntl.F_GETLK, asked))
+        return start if kind != fcntl.F_UNLCK else "no lock seen"
+    except OSError as exc:
+        return f"refused: {exc}"
+    finally:
+        os.close(fd)
+
+def other_sockets():
+    found = {}
+    for name in ("AF_VSOCK", "AF_INET", "AF_NETLINK", "AF_UNIX"):
+        try:
+            socket.socket(getattr(socket, name), socket.SOCK_DGRAM if name != "AF_VSOCK" else socket.SOCK_STREAM
+                          ).close()
+            found[name] = "made"
+        except OSError as exc:
+            found[name] = exc.errno
+    try:
+        fd = os.open(lock_file(), os.O_RDONLY)
+        fcntl.flock(fd, fcntl.LOCK_SH)
+        found["flock"] = "locked"
+    except OSError as exc:
+        found["flock"] = exc.errno
+    return found
+'''
+
+
 @pytest.fixture(scope="module")
 def package(tmp_path_factory):
     root = tmp_path_factory.mktemp("submission") / "exercises"
     root.mkdir()
     (root / "__init__.py").write_text("")
     (root / "hostile.py").write_text(textwrap.dedent(HOSTILE))
+    (root / "channels.py").write_text(textwrap.dedent(CHANNELS))
     return root
 
 
@@ -185,6 +296,41 @@ def test_seccomp_refuses_keyring_namespaces_and_memfd(package, isolation):
     eperm = [-1, 1]
     assert result.value == {"keyctl": eperm, "add_key": eperm, "unshare_user": eperm, "clone_newuser": eperm,
                             "memfd": 1, "subprocess": 0}
+
+
+#: Tokens of 16 bits sent from one submission to another (any two with a few bits set).
+TOKENS = (0b1011_0010_1100_0101, 0b0100_1101_0011_1010)
+
+
+@needs_bwrap
+@pytest.mark.skipif(os.uname().machine != "x86_64", reason="the seccomp filter is built for x86-64")
+def test_nothing_crosses_from_one_submission_to_a_later_one_through_the_page_cache(package):
+    """Graded one after the other (the writer's sandbox closed), as in two batches."""
+    for token in TOKENS:
+        with Sandbox(package, slot=0, isolation="bwrap") as writer:
+            wrote = writer.call("exercises.channels", "write_cache", [token])
+        with Sandbox(package, slot=1, isolation="bwrap") as reader:
+            found = reader.call("exercises.channels", "read_cache")
+        assert wrote.status == found.status == "ok", (wrote.message, found.message)
+        assert token not in found.value.values(), found.value
+        assert wrote.value.startswith("refused") and "Operation not permitted" in wrote.value
+        assert all(str(v).startswith("refused") for v in found.value.values()), found.value
+
+
+@needs_bwrap
+@pytest.mark.skipif(os.uname().machine != "x86_64", reason="the seccomp filter is built for x86-64")
+def test_nothing_crosses_between_submissions_graded_together_through_file_locks(package):
+    """Graded side by side (two slots, two users, as ``--jobs 2``): the writer's locks are held."""
+    with Sandbox(package, slot=0, isolation="bwrap") as writer, \
+            Sandbox(package, slot=1, isolation="bwrap") as reader:
+        wrote = writer.call("exercises.channels", "write_locks", [TOKENS[0]])
+        found = reader.call("exercises.channels", "read_locks")
+        assert wrote.status == found.status == "ok", (wrote.message, found.message)
+        assert found.value != TOKENS[0], "the reader read the writer's token"
+        assert wrote.value.startswith("refused") and found.value.startswith("refused"), (wrote.value, found.value)
+        sockets = reader.call("exercises.channels", "other_sockets")
+    assert sockets.status == "ok", sockets.message
+    assert sockets.value == {"AF_VSOCK": 1, "AF_INET": 1, "AF_NETLINK": 1, "AF_UNIX": "made", "flock": 1}
 
 
 @needs_bwrap
@@ -376,3 +522,21 @@ def test_a_sandbox_that_cannot_start_is_the_graders_failure_not_a_crash(package,
     with pytest.raises(SandboxBroken):
         run_tests(package.parent, tests, Limits(call_timeout=5.0))
 
+
+
+def test_every_sandbox_of_a_process_isolates_as_one_decision_says(package, monkeypatch):
+    """`grader check`, a batch, a direct pytest run: the sandbox decides, once per process."""
+    from grader.sandbox import isolation
+
+    trials = []
+    monkeypatch.setattr(isolation, "bwrap_works", lambda: trials.append(1) or False)
+    monkeypatch.setattr(isolation, "bwrap_available", lambda: True)
+    isolation.decided_isolation.cache_clear()
+    try:
+        boxes = [Sandbox(package, Limits(call_timeout=5.0)) for _ in range(3)]
+        assert [box.isolation for box in boxes] == ["plain"] * 3   # bubblewrap refused here: the fallback
+        assert len(trials) == 1
+        for box in boxes:
+            box.close()
+    finally:
+        isolation.decided_isolation.cache_clear()

@@ -535,6 +535,35 @@ class Sandbox:
             os.close(self._uid_lock)
             self._uid_lock = None
 
+    def cpu_seconds(self) -> float | None:
+        """CPU time (s, user + system) the sandbox's live processes have used so far, read
+        by this trusted process from /proc/PID/task/*/schedstat (nanoseconds): unlike the
+        wall clock it does not grow while other jobs hold the machine's cores.  The
+        processes are the memory cage's, else those of the sandbox's own user, else the
+        worker alone; a process that has already ended no longer counts.  None when no
+        worker runs or /proc cannot be read."""
+        if self.process is None or self.process.poll() is not None:
+            return None
+        if self._cage is not None:
+            pids = self._cage.pids()
+        elif self.uid is not None:
+            pids = [pid for pid, _ in processes_of([self.uid])]
+        else:
+            pids = [self.process.pid]
+        total = 0
+        for pid in pids:
+            try:
+                tasks = os.listdir(f"/proc/{pid}/task")
+            except OSError:
+                continue
+            for task in tasks:
+                try:
+                    with open(f"/proc/{pid}/task/{task}/schedstat") as handle:
+                        total += int(handle.read().split()[0])
+                except (OSError, ValueError, IndexError):
+                    continue
+        return total / 1e9 if pids else None
+
     # Calls ------------------------------------------------------------------------------
     def call(self, module: str, function: str, args: list | tuple = (), kwargs: dict | None = None,
              timeout: float | None = None, repeat: int = 1, batch: bool = False) -> CallResult:

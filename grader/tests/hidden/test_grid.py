@@ -13,7 +13,7 @@ from grader.harness.compare import pairs as compare_pairs
 from grader.harness.credit import fail
 from grader.oracles.brute_force import describe_boxes, overlapping_pairs
 from grader.oracles.random_cases import clustered_aabbs, random_aabbs
-from grader.tests.public.test_grid import CENTER_CELL, EVERY_CELL, MODULE, check_scenes
+from grader.tests.public.test_grid import CENTER_CELL, EVERY_CELL, MODULE, check_algorithm, check_scenes
 from solutions.broadphase.uniform_grid import suggest_cell_size
 
 TIMED_REPEATS = 3
@@ -103,6 +103,7 @@ def test_speed(student, reference, metrics):
     Both sides first run a tiny scene untimed (imports and first-call costs), then the
     timed call repeats the work ``TIMED_REPEATS`` times inside the worker.
     """
+    check_algorithm(student, EVERY_CELL)
     rng = np.random.default_rng(106)
     aabbs = random_aabbs(rng, 3000, world=150.0)
     cell = suggest_cell_size(aabbs)

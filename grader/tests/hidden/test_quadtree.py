@@ -14,8 +14,8 @@ from grader.harness.compare import show
 from grader.harness.credit import fail
 from grader.oracles.brute_force import describe_boxes, overlapping_pairs, pairs_figure, smallest_wrong_scene
 from grader.oracles.random_cases import clustered_aabbs, random_aabbs
-from grader.tests.public.test_quadtree import (FUNCTION, MODULE, WHO, call_or_timeout, check_scenes, pairs_text,
-                                               wrong_answer)
+from grader.tests.public.test_quadtree import (FUNCTION, MODULE, WHO, call_or_timeout, check_algorithm, check_scenes,
+                                               pairs_text, wrong_answer)
 
 
 # Seeded hard cases -----------------------------------------------------------------------------------
@@ -77,6 +77,7 @@ def outside_scene(rng: np.random.Generator) -> tuple[np.ndarray, list, int]:
 @pytest.mark.visibility("hidden")
 @pytest.mark.title("Quadtree: many bodies at one point terminate")
 def test_many_at_one_point(student):
+    check_algorithm(student)
     # 40 identical boxes: no split can separate them.  Copies of one point: only the
     # depth rule stops the splitting (with bounds None the point is the root's corner,
     # and halving reaches nodes one float wide that keep it).
@@ -136,6 +137,7 @@ def test_hard_cases(student):
 @pytest.mark.title("Quadtree: every stopping rule gives the same pairs")
 def test_stopping_rules(student):
     """max_depth 0, 1, 2 and a large min_node_area keep bodies in few, crowded nodes."""
+    check_algorithm(student)
     rng = np.random.default_rng(206)
     rules = [(1, 0.0, 0), (1, 0.0, 1), (1, 0.0, 2), (2, 0.0, 3), (1, 50.0, 16), (3, 400.0, 16)]
     cases = []

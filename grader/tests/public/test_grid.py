@@ -1,6 +1,8 @@
 """Uniform grid, both variants of the notes, against brute-force pairs of boxes.
 
-Every expected set of pairs comes from :mod:`grader.oracles.brute_force` (the closed
+Every test also checks that the function does the work of a grid, not of a brute force
+(:mod:`grader.oracles.scaling`: its CPU time per box on sparse scenes must not grow with
+N).  Every expected set of pairs comes from :mod:`grader.oracles.brute_force` (the closed
 box test, touching counts) or is written here as a literal derived by hand.  Cell
 sizes follow a simple rule of this file: a cell as large as the largest box (each box
 then overlaps at most 2 x 2 cells), or a half, a quarter or twice that.
@@ -17,6 +19,7 @@ from grader.harness.compare import show
 from grader.harness.credit import fail
 from grader.oracles.brute_force import describe_boxes, overlapping_pairs, pairs_figure, smallest_wrong_scene
 from grader.oracles.random_cases import clustered_aabbs, random_aabbs
+from grader.oracles.scaling import growth_problem
 from grader.harness.outcome import StudentCallFailed, StudentCallStopped
 
 MODULE = "broadphase.uniform_grid"
@@ -26,6 +29,20 @@ CENTER_CELL = "pairs_grid_center_cell"
 CELL_FACTORS = (1.0, 0.5, 0.25, 2.0)
 #: Cell sizes of the category tests: powers of two, so that k * cell is exact.
 CELLS = st.sampled_from([1.0, 0.5, 2.0, 0.25])
+#: What each function must do, in the words of the message when it does the work of a
+#: brute force instead (:mod:`grader.oracles.scaling`).
+ALGORITHMS = {EVERY_CELL: "a grid (each box stored in the cells it overlaps, only boxes sharing a cell tested)",
+              CENTER_CELL: "a grid (each box stored in its centre's cell, only the neighbouring cells searched)"}
+#: Cell size (m) of the growth measurement: twice the largest box of its sparse scenes.
+GROWTH_CELL = 2.0
+
+
+def check_algorithm(student, function: str) -> None:
+    """Fail every test of ``function`` when it does the work of a brute force (measured
+    once a session): right pairs from testing every pair are not the exercise."""
+    problem = growth_problem(student, MODULE, function, lambda boxes: (boxes, GROWTH_CELL), ALGORITHMS[function])
+    if problem is not None:
+        fail(problem)
 
 
 # Comparing and reporting -----------------------------------------------------------------
@@ -54,6 +71,7 @@ def wrong_answer(function: str, boxes, cell: float, answer, want=None, title: st
 
 def check_scene(student, function: str, boxes, cell: float, label: str) -> None:
     """One scene, all or nothing (the category and @given tests)."""
+    check_algorithm(student, function)
     boxes = np.asarray(boxes, dtype=float).reshape(-1, 4)
     found = wrong_answer(function, boxes, cell, student.call(MODULE, function, boxes, cell))
     if found is not None:
@@ -63,6 +81,7 @@ def check_scene(student, function: str, boxes, cell: float, label: str) -> None:
 def check_scenes(student, function: str, scenes: list[tuple[np.ndarray, float]], label: str) -> None:
     """Seeded scenes in one round trip; fail with the share of right scenes and a
     failing scene cut down to a few boxes."""
+    check_algorithm(student, function)
     answers = student.call_many(MODULE, function, [(boxes, cell) for boxes, cell in scenes])
     wrong = [(boxes, cell, found) for (boxes, cell), answer in zip(scenes, answers)
              if (found := wrong_answer(function, boxes, cell, answer)) is not None]
@@ -223,6 +242,7 @@ SPECIAL_CELLS = (1.0, 0.5, 3.0)
 
 
 def check_special_cases(student, function: str) -> None:
+    check_algorithm(student, function)
     cases = [(name, np.array(boxes, dtype=float), want, cell)
              for name, boxes, want in SPECIAL_CASES for cell in SPECIAL_CELLS]
     answers = student.call_many(MODULE, function, [(boxes, cell) for _, boxes, _, cell in cases])
@@ -247,6 +267,7 @@ def test_every_cell_touching(student):
     # Boxes 0-1 share the edge x = 1, 1-2 the corner (2, 1), 0-3 the corner (0, 0) and
     # 4-5 the corner (5, 5); every edge lies on a cell line for cells of 1 and 0.5 m,
     # also after moving the scene by (-3, -3).
+    check_algorithm(student, EVERY_CELL)
     boxes = np.array([[0, 0, 1, 1], [1, 0, 2, 1], [2, 1, 3, 2], [-1, -1, 0, 0], [5, 5, 6, 6], [4, 4, 5, 5]], float)
     want = {(0, 1), (1, 2), (0, 3), (4, 5)}
     scenes = [(shifted, cell) for shifted in (boxes, boxes - 3.0) for cell in (1.0, 0.5)]

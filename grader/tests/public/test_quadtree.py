@@ -19,11 +19,22 @@ from grader.harness.compare import show
 from grader.harness.credit import fail
 from grader.oracles.brute_force import describe_boxes, overlapping_pairs, pairs_figure, smallest_wrong_scene
 from grader.oracles.random_cases import clustered_aabbs, random_aabbs
+from grader.oracles.scaling import growth_problem
 from grader.harness.outcome import StudentCallFailed, StudentCallStopped
 
 MODULE = "broadphase.quadtree"
 FUNCTION = "pairs_quadtree"
 WHO = "pairs_quadtree (your Quadtree.insert, child_holding, split and pairs)"
+ALGORITHM = ("a quadtree (each body tested against its own node and the nodes below it that its box touches, "
+             "not against every body)")
+
+
+def check_algorithm(student) -> None:
+    """Fail every pairs test when pairs_quadtree does the work of a brute force (measured
+    once a session, bounds None): right pairs from testing every pair are not the exercise."""
+    problem = growth_problem(student, MODULE, FUNCTION, lambda boxes: (boxes,), ALGORITHM)
+    if problem is not None:
+        fail(f"{problem} (pairs_quadtree runs your Quadtree.insert, split and pairs)")
 
 
 # Comparing and reporting -----------------------------------------------------------------
@@ -76,6 +87,7 @@ def call_or_timeout(student, boxes, bounds, max_bodies: int, label: str, timeout
 
 def check_scene(student, boxes, bounds, max_bodies: int, label: str) -> None:
     """One scene, all or nothing (the category and @given tests)."""
+    check_algorithm(student)
     boxes = np.asarray(boxes, dtype=float).reshape(-1, 4)
     found = wrong_answer(boxes, bounds, max_bodies, student.call(MODULE, FUNCTION, boxes, bounds, max_bodies))
     if found is not None:
@@ -85,6 +97,7 @@ def check_scene(student, boxes, bounds, max_bodies: int, label: str) -> None:
 def check_scenes(student, scenes: list[tuple], label: str) -> None:
     """Seeded scenes ``(boxes, bounds, max_bodies)`` in one round trip; fail with the
     share of right scenes and a failing scene cut down to a few boxes."""
+    check_algorithm(student)
     answers = student.call_many(MODULE, FUNCTION, scenes)
     wrong = [(scene, found) for scene, answer in zip(scenes, answers)
              if (found := wrong_answer(*scene, answer)) is not None]
@@ -278,6 +291,7 @@ def test_straddling(student):
 def test_special_cases(student):
     # Five copies of one point, bounds None: the point is the root's corner and halving
     # reaches nodes one float wide that still hold it; only max_depth ends the splitting.
+    check_algorithm(student)
     points = np.tile([[0.3, 0.3, 0.3, 0.3]], (5, 1))
     answer = call_or_timeout(student, points, None, 1, "five copies of one point")
     found = wrong_answer(points, None, 1, answer, [(i, j) for i in range(5) for j in range(i + 1, 5)])

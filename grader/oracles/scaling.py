@@ -1,0 +1,121 @@
+"""Does a broad phase do the work of its algorithm?  The growth of its CPU time with N.
+
+A grid or a quadtree on a *sparse* scene (boxes about 1 m wide, one per 4 m^2 whatever
+N, so the number of overlapping pairs grows like N) does about N units of work (N log N
+for a quadtree): multiplying N by :data:`GROWTH_FACTOR` multiplies the work by about
+that factor.  A brute force tests all N (N - 1) / 2 pairs: its work grows with the
+square of N, whatever library function or numpy trick performs it, so a grid function
+that returns the shipped brute force answers right and still fails here.
+
+Measured as CPU time of the sandbox's processes (:meth:`grader.sandbox.process.Sandbox.cpu_seconds`,
+read by the trusted process from /proc, so other jobs on the machine do not count), for
+the small scene called ``GROWTH_FACTOR * REPEATS`` times and the large one ``REPEATS``
+times inside the worker: the same number of boxes either way, so a linear algorithm's
+two times are about equal and a quadratic one's differ by about ``GROWTH_FACTOR``.
+The ratio limit :data:`MAX_GROWTH` lies between them; a ratio above it is measured
+again and the smaller ratio kept.
+"""
+from __future__ import annotations
+
+import math
+import weakref
+from typing import Callable
+
+import numpy as np
+
+from ..harness.outcome import StudentCallFailed
+from .random_cases import random_aabbs
+
+#: Boxes in the small scene, and how many times more in the large one.
+SMALL_SCENE = 2000
+GROWTH_FACTOR = 8
+#: Calls of the large scene in one timed request (the small one: GROWTH_FACTOR times more).
+REPEATS = 1
+#: Largest accepted ratio (large scene's CPU time / small scene's, same number of boxes
+#: processed): a grid measures about 1.0 to 1.6, a quadtree 1.1 to 1.7, a brute force 4
+#: to 8 (the numpy brute force of the library) and more.
+MAX_GROWTH = 2.5
+#: The large scene's call may take at most this many times the small one's (and at least
+#: MIN_TIMEOUT seconds) before it is stopped: a pure-Python brute force on 8 000 boxes
+#: would take a minute.
+TIMEOUT_RATIO = 12.0
+MIN_TIMEOUT = 5.0
+
+#: The measured verdict per package under test and function: one measurement a session.
+_VERDICTS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def sparse_scene(count: int, seed: int) -> np.ndarray:
+    """``count`` boxes 0.1 to 1 m wide spread at a constant density (one per 4 m^2)."""
+    return random_aabbs(np.random.default_rng(seed), count, world=2.0 * math.sqrt(count), size=1.0)
+
+
+def timed_cpu(student, module: str, function: str, args: tuple, repeat: int, timeout: float) -> float | None:
+    """CPU seconds of ``repeat`` calls in one request (wall clock where CPU time cannot
+    be read); None if the call timed out.  A call that fails otherwise raises, as
+    :meth:`~grader.harness.student_code.StudentCode.call` does."""
+    before = student.sandbox.cpu_seconds()
+    result = student.raw(module, function, *args, repeat=repeat, timeout=timeout)
+    after = student.sandbox.cpu_seconds()
+    if result.status == "timeout":
+        return None
+    if repeat:
+        student.value_of(result, f"{module}.{function}")
+    if before is None or after is None or after < before:
+        return result.elapsed
+    return after - before
+
+
+def work_cpu(student, module: str, function: str, args: tuple, repeat: int, timeout: float) -> float | None:
+    """CPU seconds of ``repeat`` calls less that of a request that calls nothing (the
+    worker's reading of the scene: it grows with N however the function works)."""
+    spent = timed_cpu(student, module, function, args, repeat, timeout)
+    if spent is None:
+        return None
+    reading = timed_cpu(student, module, function, args, 0, timeout=60.0) or 0.0
+    return max(spent - reading, 1e-6)
+
+
+def growth(student, module: str, function: str, args_of: Callable[[np.ndarray], tuple]) -> tuple[float, str]:
+    """(ratio, how it was measured) for one measurement; ratio inf when the large scene
+    timed out."""
+    small, large = sparse_scene(SMALL_SCENE, 1), sparse_scene(SMALL_SCENE * GROWTH_FACTOR, 2)
+    student.call(module, function, *args_of(small[:20]))                  # imports and first-call costs
+    small_time = work_cpu(student, module, function, args_of(small), GROWTH_FACTOR * REPEATS, timeout=60.0)
+    if small_time is None:
+        return math.inf, f"{GROWTH_FACTOR * REPEATS} calls on {SMALL_SCENE} boxes took longer than 60 s"
+    limit = max(MIN_TIMEOUT, TIMEOUT_RATIO * small_time)
+    large_time = work_cpu(student, module, function, args_of(large), REPEATS, timeout=limit)
+    shown = (f"{GROWTH_FACTOR * REPEATS} calls on {SMALL_SCENE} boxes took {small_time:.3f} s of CPU time, "
+             f"{REPEATS} calls on {SMALL_SCENE * GROWTH_FACTOR} boxes ")
+    if large_time is None:
+        return math.inf, shown + f"did not finish in {limit:.1f} s"
+    return large_time / small_time, shown + f"took {large_time:.3f} s"
+
+
+def growth_problem(student, module: str, function: str, args_of: Callable[[np.ndarray], tuple],
+                   algorithm: str) -> str | None:
+    """None when ``function`` does the work of ``algorithm`` (a sentence: "a grid visits
+    the cells a box overlaps"), else why not; measured once per package and function.
+
+    ``args_of(boxes)`` gives the call's arguments for a scene.  Student calls that fail
+    (an exception, a stub) are not judged here: None, and the test's own calls report them.
+    """
+    verdicts = _VERDICTS.setdefault(student, {})
+    key = (module, function)
+    if key not in verdicts:
+        try:
+            ratio, how = growth(student, module, function, args_of)
+            if ratio > MAX_GROWTH:  # measured again: a busy moment must not cost the points
+                second, second_how = growth(student, module, function, args_of)
+                if second < ratio:
+                    ratio, how = second, second_how
+        except StudentCallFailed:
+            ratio, how = 0.0, ""
+        verdicts[key] = None if ratio <= MAX_GROWTH else (
+            f"{function} does the work of a brute force, not of {algorithm}: on sparse scenes (boxes about 1 m "
+            f"wide at a constant density, so the pairs grow like N), {GROWTH_FACTOR} times more boxes took "
+            f"{'too long' if math.isinf(ratio) else f'{ratio:.1f} times more CPU time per box'} (at most "
+            f"{MAX_GROWTH:g} times allowed; {algorithm} needs about the same time per box whatever N). {how}. "
+            f"Testing every pair (or calling a brute force) gives the right pairs but is not the exercise.")
+    return verdicts[key]

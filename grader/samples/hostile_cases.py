@@ -90,7 +90,7 @@ COLLIDE_CIRCLES = frozenset({"contacts.circle_circle", "contacts.degenerate_shap
 #: Tests whose functions live in narrowphase.circle_circle (circles_overlap, collide_circle_circle).
 CIRCLE_CIRCLE = frozenset({"sat.circles_overlap", "sat.degenerate_shapes", "sat.random_against_reference"}) \
     | COLLIDE_CIRCLES
-#: The test that steps a scene with the student's resolver (grader/sandbox/scene_driver.py).
+#: The test that steps a scene with the student's resolver (stepped in the trusted process).
 SCENE = frozenset({"impulse.scene"})
 
 FAILED_ANSWER = ("failed",)
@@ -724,6 +724,47 @@ _shapes.Circle = _MovedCircle
         # The memory cage (Limits.total_memory_bytes, 3 GiB) kills a child (MemoryError) or the
         # worker; reclaiming memory in a full cage may take the call past its time.
         expect=raising(INELASTIC, ERROR + CRASHED + TIMEOUT)),
+    # issue 24: the grader's scene driver ran in the student's process, so a stubs package
+    # could swap it for one returning the analytic resting stack (+2 on main).  Scenes are
+    # now stepped in the trusted process: there is no driver here to swap.
+    HostileCase(
+        "hostile-driver-swap", "hostile",
+        "On the stubs, solver/contact_point.py wraps the worker's module loader so that the grader's scene "
+        "driver, once loaded, returns the analytic resting stack of ten boxes, without any working function.",
+        base="stubs",
+        appends=(("solver.contact_point", '''
+
+import sys as _sys
+
+
+def _resting_stack(steps=60, count=10, dt=1 / 60, iterations=20):
+    trajectory = [[[0.5 + k, 0.0] for k in range(count)] for _ in range(steps)]
+    impulses = [[(count - k) * 9.81 * dt for k in range(count)] for _ in range(steps)]
+    return {"trajectory": trajectory, "impulses": impulses}
+
+
+def _swap_driver():
+    worker = _sys.modules.get("__main__")
+    load = getattr(getattr(worker, "Worker", None), "load", None)
+    if load is None:
+        return
+
+    def load_and_swap(self, name):
+        module = load(self, name)
+        if hasattr(module, "stack_of_boxes"):
+            module.stack_of_boxes = _resting_stack
+        return module
+
+    worker.Worker.load = load_and_swap
+    driver = _sys.modules.get("scene_driver")
+    if driver is not None:
+        driver.stack_of_boxes = _resting_stack
+
+
+_swap_driver()
+'''),),
+        # Nothing of the grader runs beside the stubs: every test reads "not implemented".
+        expect=()),
 )
 
 # --------------------------------------------------------------------------- sizes
@@ -756,36 +797,6 @@ SIZES = (
         # The answer passes the grader's 16 MiB limit on what it reads: refused unread.  (A
         # ValueError: the bad-input test, whose answers stay small, passes.)
         expect=(Expect(INELASTIC - BAD_INPUT, ERROR, ("larger than the grader accepts",)),)),
-    HostileCase(
-        "hostile-huge-trajectory", "hostile",
-        "response/impulse.py (an exercise file: library files are the course's) wraps Body.circle so that, once "
-        "the scene driver runs (it builds its balls with it), the driver is replaced by one returning a "
-        "trajectory of 2,000 balls per step instead of its 16 (about 5 MB, under the 16 MiB the grader reads).",
-        appends=(("response.impulse", '''
-
-import sys as _sys
-
-from exercises.body import Body
-
-
-def _enormous(steps=120, *args, **kwargs):
-    frame = [[0.0, 0.0, 0.0, 0.0]] * 2_000
-    return {"radius": 0.2, "dt": 1 / 60, "trajectory": [frame] * steps}
-
-
-_circle = Body.circle.__func__
-
-
-def _circle_and_driver(cls, *args, **kwargs):
-    driver = _sys.modules.get("scene_driver")
-    if driver is not None:
-        driver.drop_balls = _enormous
-    return _circle(cls, *args, **kwargs)
-
-
-Body.circle = classmethod(_circle_and_driver)
-'''),),
-        expect=(Expect(SCENE, FAILED_ANSWER, ("wrong shape", "16 balls", "2000 balls at step 0")),)),
 )
 
 # --------------------------------------------------------------------------- archives

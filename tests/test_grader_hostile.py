@@ -46,11 +46,12 @@ from grader.samples import hostile_cases as hc
 from grader.batch.grade import grade_submissions
 from grader.batch.gradebook import LOG_NAME, read_grading_log
 from grader.reports.results import check_results, write_results
-from grader.sandbox.process import (RESPONSE_LIMIT, SANDBOX_UID_BASE, Limits, Sandbox, bwrap_available, processes_of,
+from grader.sandbox.isolation import bwrap_available
+from grader.sandbox.process import (RESPONSE_LIMIT, SANDBOX_UID_BASE, Limits, Sandbox, processes_of,
                             stray_processes, uid_in_use)
 from grader.harness.run import load_spec
 from grader.batch.submissions import (MAX_FILES, Submission, SubmissionRefused, checked_path, discover, fingerprint,
-                                opened, scan_folder)
+                                hard_links, opened, scan_folder)
 
 REPO = Path(__file__).resolve().parent.parent
 IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc")
@@ -321,7 +322,7 @@ def results_of(batch, name: str) -> dict:
 # The cases ------------------------------------------------------------------------------------------
 def test_the_cases_are_all_there_and_distinct():
     names = [c.name for c in hc.CASES]
-    assert len(names) == len(set(names)) and len(names) == 55
+    assert len(names) == len(set(names)) and len(names) == 59
     spec = {t.name for t in load_spec()}
     for case in hc.CASES:
         assert case.category in ("broken", "hostile") and case.what and case.base in ("reference", "stubs")
@@ -336,7 +337,8 @@ def test_the_cases_are_all_there_and_distinct():
                  "write-results", "write-outside", "leave-process", "dotdot", "absolute", "symlink", "zip-bomb",
                  "copy-of-reference", "keyring-store", "keyring-fetch", "memfd", "disk-filler", "fork-memory",
                  "huge-contact", "huge-message", "huge-trajectory", "link-exercises", "link-to-friend-folder",
-                 "link-to-friend-zip", "link-as-submission", "sparse-file", "many-files"):
+                 "link-to-friend-zip", "link-as-submission", "sparse-file", "many-files", "sealed-payload",
+                 "huge-integer", "sourceless-bytecode", "zip-import-in-notes"):
         assert word in covered, word
     # The key is stored before it is looked for: the batch grades in this order.
     assert names.index("hostile-keyring-fetch") == len(names) - 1
@@ -1033,23 +1035,29 @@ def test_a_symbolic_link_anywhere_in_a_submission_is_refused_not_followed(tmp_pa
         assert "is a symbolic link" in refusal(tmp_path / name, verify=False), name
 
 
-def test_a_hard_link_in_or_as_a_submission_is_refused(tmp_path):
-    """A hard link is a second name of a file that lives elsewhere (the reference,
-    a friend's folder or zip): its content is not the submission's own."""
+def test_a_hard_link_is_graded_by_content_and_flagged_for_both_never_refused(tmp_path):
+    """A hard link's two names are one file: nothing says which student made it, so the
+    classmate whose file was linked to must lose nothing (it was refused, with the linker:
+    0 of 134).  Each is graded by its content, and both are flagged, naming the other."""
     friend = stub_folder(tmp_path / "friend")
     (friend / "exercises" / "momentum.py").write_text("ANSWER = 42\n")
-    shutil.make_archive(str(tmp_path / "friend"), "zip", friend)
+    shutil.make_archive(str(tmp_path / "classmate"), "zip", friend)
     linked = stub_folder(tmp_path / "linked")
     os.link(friend / "exercises" / "momentum.py", linked / "exercises" / "momentum.py")
-    before = bytes_read()
-    with pytest.raises(SubmissionRefused, match="is a hard link") as refused:
-        fingerprint(linked)
-    assert "exercises/momentum.py" in str(refused.value) and bytes_read() - before < 64 * 1024
-    assert "is a hard link" in refusal(linked)
-    os.link(tmp_path / "friend.zip", tmp_path / "copycat.zip")
-    with pytest.raises(SubmissionRefused, match="the submission 'copycat.zip' is a hard link"):
-        checked_path(tmp_path / "copycat.zip")
-    assert "the submission 'copycat.zip' is a hard link" in refusal(tmp_path / "copycat.zip")
+    assert fingerprint(linked) == fingerprint(friend)  # read by content, as a copy would be
+    with opened(discover([linked])[0]) as folder:
+        assert (folder / "exercises" / "momentum.py").read_text() == "ANSWER = 42\n"
+    os.link(tmp_path / "classmate.zip", tmp_path / "copycat.zip")
+    checked_path(tmp_path / "copycat.zip")
+    flags = hard_links(discover([friend, linked, tmp_path / "copycat.zip", tmp_path / "classmate.zip"]))
+    assert flags["friend"] == ["'exercises/momentum.py' is a hard link: the same file as linked's "
+                               "'exercises/momentum.py'"]
+    assert flags["linked"] == ["'exercises/momentum.py' is a hard link: the same file as friend's "
+                               "'exercises/momentum.py'"]
+    assert "the same file as classmate's 'classmate.zip'" in flags["copycat"][0]
+    alone = hard_links(discover([linked]))
+    assert alone["linked"] == ["'exercises/momentum.py' is a hard link: the same file as 1 name(s) outside this batch"]
+    assert not hard_links(discover([stub_folder(tmp_path / "honest")]))
 
 
 @needs_sandbox

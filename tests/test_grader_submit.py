@@ -13,6 +13,7 @@ import json
 import os
 import re
 import shutil
+import struct
 import zipfile
 from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
@@ -284,3 +285,82 @@ def test_a_submitted_zip_grades_and_a_tampered_one_is_refused(handed_in, tmp_pat
         assert rows[name]["state"] == "refused" and rows[name]["score"] == 0
         assert "exercises/response/momentum_1d.py' was changed after `bash run.sh submit` wrote the zip" \
             in rows[name]["message"]
+
+
+# Issue 24: only source, refusals in bounded time ---------------------------------------------------
+def test_bytecode_and_archives_in_the_package_are_refused_naming_them(tmp_path):
+    folder = course(tmp_path)
+    package = folder / "exercises"
+    with opened(Submission("s", folder, "folder"), tmp_path):
+        pass  # the reference as it is: source only
+    (package / "__pycache__").mkdir(exist_ok=True)
+    (package / "__pycache__" / "world.cpython-311.pyc").write_bytes(b"\0litter")  # never read nor copied
+    with opened(Submission("s", folder, "folder"), tmp_path):
+        pass
+    for name, data in (("response/momentum_1d.pyc", b"\xa7\r\r\n" + bytes(12)), ("fast.cpython-311-x86_64-linux-gnu.so",
+                       b"\x7fELF"), ("hook.pth", b"import os\n"), ("notes.txt", b"PK\x05\x06" + bytes(18))):
+        (package / name).write_bytes(data)
+        with pytest.raises(SubmissionRefused, match="only source is graded") as refused:
+            with opened(Submission("s", folder, "folder"), tmp_path):
+                pass
+        assert f"exercises/{name}" in str(refused.value)
+        (package / name).unlink()
+
+
+def test_a_pyc_counts_in_the_manifest_and_the_fingerprint(handed_in, tmp_path):
+    from grader.batch.submissions import fingerprint
+    unpacked = tmp_path / "unpacked"
+    safe_extract(handed_in.zip, unpacked)
+    before = fingerprint(unpacked)
+    (unpacked / "exercises" / "vector.pyc").write_bytes(b"\0")
+    assert fingerprint(unpacked) != before
+    with pytest.raises(SubmissionRefused, match="vector.pyc' is not in MANIFEST.json"):
+        verify_manifest(unpacked)
+
+
+def _extra_field_zip(path: Path, members: int) -> Path:
+    """Members whose 64 KiB extra fields hold 4-byte records: zipfile parses each in
+    time quadratic in its length."""
+    extra = b"\xaa\xaa\x00\x00" * (65532 // 4)
+    with zipfile.ZipFile(path, "w") as archive:
+        for n in range(members):
+            info = zipfile.ZipInfo(f"exercises/f{n}.py")
+            info.extra = extra
+            archive.writestr(info, b"")
+    return path
+
+
+def test_zip_directories_over_the_caps_are_refused_before_zipfile_parses_them(tmp_path):
+    import time
+    slow = _extra_field_zip(tmp_path / "slow.zip", 60)  # 3.9 MB of directory: under the size cap
+    started = time.perf_counter()
+    zipfile.ZipFile(slow).close()
+    parse_seconds = time.perf_counter() - started
+    started = time.perf_counter()
+    assert "extra field or comment of 65532 bytes" in refusal(slow, tmp_path)
+    refuse_seconds = time.perf_counter() - started
+    assert refuse_seconds < 0.2 and refuse_seconds < parse_seconds / 5, (refuse_seconds, parse_seconds)
+    # An end record claiming more entries, or a larger directory, than the caps: read from it alone.
+    for count, size, words in ((70_000, 1000, "70000 entries"), (10, 50 * 1024**2, "takes 50.0 MiB")):
+        fake = tmp_path / f"fake-{count}.zip"
+        fake.write_bytes(b"PK\x05\x06" + struct.pack("<HHHHIIH", 0, 0, count & 0xFFFF, count & 0xFFFF, size, 0, 0)
+                         if count < 0x10000 else _zip64_end(count, size))
+        started = time.perf_counter()
+        assert words in refusal(fake, tmp_path)
+        assert time.perf_counter() - started < 0.1
+
+
+def _zip64_end(count: int, size: int) -> bytes:
+    record = b"PK\x06\x06" + struct.pack("<QHHIIQQQQ", 44, 45, 45, 0, 0, count, count, size, 0)
+    locator = b"PK\x06\x07" + struct.pack("<IQI", 0, 0, 1)
+    end = b"PK\x05\x06" + struct.pack("<HHHHIIH", 0, 0, 0xFFFF, 0xFFFF, 0xFFFFFFFF, 0xFFFFFFFF, 0)
+    return record + locator + end
+
+
+def test_a_deeply_nested_manifest_is_refused_not_a_grader_error(handed_in, tmp_path):
+    unpacked = tmp_path / "unpacked"
+    safe_extract(handed_in.zip, unpacked)
+    for text in ("[" * 200_000 + "]" * 200_000, '{"format": ' + '{"a": ' * 100_000 + "1" + "}" * 100_001):
+        (unpacked / MANIFEST_NAME).write_text(text)
+        with pytest.raises(SubmissionRefused, match="nests .* levels deep; a manifest nests at most 8"):
+            verify_manifest(unpacked)

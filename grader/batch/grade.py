@@ -45,7 +45,7 @@ from ..sandbox.process import Limits
 from .scheduler import Job, Worker, dismiss, run_jobs, run_order
 from ..harness.spec import TestSpec
 from ..harness.run import load_spec
-from .submissions import SubmissionPathError, SubmissionRefused, discover, fingerprint, library_hash
+from .submissions import SubmissionPathError, SubmissionRefused, discover, fingerprint, hard_links, library_hash
 from ..harness.spec import SpecError
 
 WORK_NAME = ".work"  # scratch folder of a run inside the output folder, removed after
@@ -179,6 +179,8 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
         raise ValueError(f"jobs must be at least 1, got {jobs}")
     submissions = discover(paths)
     out_dir = Path(out_dir)
+    # Files with two names are graded by content and flagged, never refused (submissions.hard_links).
+    linked = hard_links(submissions)
     if out_dir.exists() and not out_dir.is_dir():
         raise GradingError(f"--out {out_dir} exists and is not a folder")
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -256,6 +258,7 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                     chosen = resolve_isolation(isolation, warn)
                     for job in todo:
                         job.isolation = chosen
+                    todo[-1].hard_links = linked.get(submission.id, [])
                         job.library = library_digest
                     config = {"tests": [dataclasses.asdict(t) for t in tests], "limits": dataclasses.asdict(limits),
                               "isolation": chosen, "library": None if library is None else str(Path(library).resolve())}

@@ -43,6 +43,7 @@ from ..errors import GradingError
 from ..harness.outcome import Outcome
 from ..sandbox.process import Limits
 from ..harness.spec import TestSpec
+from .source_audit import source_flags, suspicious_lines, withheld_functions
 from .submissions import Submission, SubmissionRefused, submitted_package, opened, with_course_library
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
@@ -106,7 +107,11 @@ def worker_main() -> int:
                 # Graded with the course's library files; the exercise files are the submission's.
                 package, replaced = stack.enter_context(with_course_library(package, config.get("library"),
                                                                             config["tmp"]))
-                send({"event": "started", "job": number, "package": where, "library_replaced": replaced})
+                # Read from the files, before any of them runs (grader.batch.source_audit).
+                withheld = withheld_functions(package, config.get("library"))
+                flags = source_flags(withheld, suspicious_lines(package, config.get("library")))
+                send({"event": "started", "job": number, "package": where, "library_replaced": replaced,
+                      "source_flags": flags})
                 # pytest runs the tests in its own order (module paths sorted: hidden/ before
                 # public/), not the spec's: each result finds its index by the test's name.
                 index_of = {tests[i].name: i for i in indices}
@@ -123,7 +128,7 @@ def worker_main() -> int:
                           "outcome": result.outcome.to_dict(), "seconds": result.seconds})
 
                 run_tests(package, [tests[i] for i in indices], limits, slot, config["isolation"],
-                          budget_seconds=job["budget"], progress=progress)
+                          budget_seconds=job["budget"], progress=progress, withheld=withheld)
         except SubmissionRefused as exc:
             send({"event": "refused", "job": number, "reason": str(exc)})
         except Exception as exc:  # the grader's own failure: the parent reports it, writes nothing
@@ -271,6 +276,8 @@ class Job:
     isolation: str | None = None   # bwrap or plain, as the batch resolved it
     library: str | None = None   # hash of the course's library files graded with (submissions.library_hash)
     library_replaced: list[str] = field(default_factory=list)   # the submission's that differed
+    source_flags: dict | None = None  # what its source shows (grader.batch.source_audit.source_flags)
+    hard_links: list[str] = field(default_factory=list)  # files shared with others (submissions.hard_links)
     refused: str | None = None
     error: str | None = None
 
@@ -384,6 +391,7 @@ def _handle_event(worker: Worker, event: dict, per_test_seconds: float,
     if kind == "started":
         job.package = event.get("package")
         job.library_replaced = [str(name) for name in event.get("library_replaced") or []]
+        job.source_flags = event.get("source_flags") if isinstance(event.get("source_flags"), dict) else None
         worker.deadline = now + per_test_seconds
     elif kind == "test":
         index = int(event["index"])

@@ -10,9 +10,10 @@ look, not a verdict.
 
 How code is compared
 --------------------
-Only what students write counts: the functions of the modules that hold exercises
-(the modules of ``solutions/`` with ``### BEGIN SOLUTION`` markers), top-level
-functions and methods, helpers a student added included.  A function whose
+Only what students write counts: the functions of every ``.py`` file of the package
+(the exercise modules, and library files, ``__init__.py`` and files a student added:
+code hidden there is compared too), top-level functions and methods, and each
+module's top-level code (what runs at import) as one more.  A function whose
 normalised code is that of the distributed stub (``exercises/``) is left out, and so
 is every fingerprint the stubs hold (boilerplate removal, as copydetect's
 ``boilerplate_dirs`` does): untouched stubs, identical in every submission, never
@@ -216,6 +217,31 @@ def exercise_modules(reference_dir: Path = REFERENCE_DIR) -> list[str]:
 
 
 def _functions(tree: ast.Module) -> list[tuple[str, ast.FunctionDef]]:
+def package_modules(package: Path) -> list[str]:
+    """Dotted names (inside the package) of every ``.py`` file of ``package``, its
+    ``__init__`` files included (``broadphase.__init__``), ``__pycache__`` and links left out."""
+    modules = []
+    for path in sorted(Path(package).rglob("*.py")):
+        relative = path.relative_to(package)
+        if "__pycache__" in relative.parts or any(p.is_symlink() for p in (path, *path.parents)):
+            continue
+        modules.append(".".join(relative.with_suffix("").parts))
+    return modules
+
+
+#: The name of a module's top-level code (everything but its imports, functions, classes
+#: and docstring), compared as one more function: code run at import counts too.
+MODULE_CODE = "<module code>"
+
+
+def _module_code(tree: ast.Module) -> list[ast.stmt]:
+    body = list(tree.body)
+    if body and isinstance(body[0], ast.Expr) and isinstance(getattr(body[0], "value", None), ast.Constant):
+        body = body[1:]
+    return [node for node in body if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef,
+                                                            ast.Import, ast.ImportFrom))]
+
+
     found = []
     for node in tree.body:
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
@@ -255,6 +281,13 @@ def read_package(package: Path | None, modules: list[str], code: Code,
             first = min([node.lineno, *(d.lineno for d in node.decorator_list)])
             code.functions.append(Function(module, qualname, first, lines[first - 1:node.end_lineno], tokens))
     return code
+        statements = _module_code(tree)
+        if statements:
+            tokens: list[tuple[str, int]] = []
+            _body(statements, tokens, statements[0].lineno)
+            if stubs is None or [t for t, _ in tokens] != stubs.get(f"{module}.{MODULE_CODE}"):
+                first, last = statements[0].lineno, max(n.end_lineno or n.lineno for n in statements)
+                code.functions.append(Function(module, MODULE_CODE, first, lines[first - 1:last], tokens))
 
 
 def stub_tokens(stubs_dir: Path, modules: list[str], k: int = K,
@@ -420,7 +453,9 @@ def load_codes(paths: list[str | os.PathLike], modules: list[str], stubs: dict[s
         code = Code(submission.id, str(submission.path))
         try:
             with opened(submission, verify=False) as folder:  # tampered or not, the code is compared
-                read_package(submitted_package(folder), modules, code, stubs)
+                package = submitted_package(folder)
+                # Every file: code hidden in a library file or __init__.py is compared too.
+                read_package(package, sorted(set(modules) | set(package_modules(package))), code, stubs)
         except SubmissionRefused as exc:
             code.notes.append(f"not read: {exc}")
         except OSError as exc:
@@ -438,7 +473,9 @@ def find_similar(paths: list[str | os.PathLike], out_dir: str | os.PathLike,
     Returns the flagged pairs, most similar first.
     """
     modules = exercise_modules(Path(reference) if reference is not None else REFERENCE_DIR)
-    stubs, boilerplate = stub_tokens(Path(stubs_dir), modules, k, window)
+    # The stubs of every file handed out: untouched library files never count either.
+    stubs, boilerplate = stub_tokens(Path(stubs_dir), sorted(set(modules) | set(package_modules(Path(stubs_dir)))),
+                                     k, window)
     codes = load_codes(paths, modules, stubs, boilerplate, k, window)
     pairs = [compare(a, b) for a, b in itertools.combinations(codes, 2)]
     everyone = list(codes)

@@ -43,13 +43,23 @@ Hand-in manifests
 next to ``exercises/``: the sha256 and size of every file it put in.  When a submission
 holds one (an archive, or a folder such as Gradescope's unpacked upload), :func:`opened`
 checks it with :func:`verify_manifest` before anything is graded: every listed file must
-be there with the same size and hash, and no other file may be (``__pycache__``, ``.pyc``
-and the litter of :data:`IGNORED_NAMES` aside: the grader never reads them).  A
+be there with the same size and hash, and no other file may be (``__pycache__`` and the
+litter of :data:`IGNORED_NAMES` aside: the grader never reads or copies them).  A
 submission that fails is refused, and the message says which file was changed, removed
 or added after ``grader submit`` wrote the zip.  The manifest is a check against
 accidents (a file edited or added after submitting, a damaged upload), not a signature:
 whoever holds the files can write a new one.  Submissions without a manifest are graded
 as before.
+
+Only source is graded
+---------------------
+The package must hold source only (:func:`grader.student.manifest.check_source_only`):
+files with the suffixes of :data:`grader.sandbox.process.SOURCE_SUFFIXES` (``.py`` and
+``.md``, ``.txt``, ``.json``), none holding a zip's end record or a NUL byte.  A
+``.pyc`` (imported without its source), an extension module, a ``.pth``, an archive
+to import from, or any other file refuses the submission, naming the files, in
+folders, zips and on Gradescope alike; the sandbox copies only those suffixes and
+never a ``__pycache__`` (:func:`grader.sandbox.process.copy_package`).
 
 Examples
 --------
@@ -64,6 +74,7 @@ import errno
 import hashlib
 import json
 import os
+import re
 import shutil
 import stat
 import tempfile
@@ -73,7 +84,7 @@ from pathlib import Path, PurePosixPath
 from typing import Iterator
 
 from ..harness.package import PackageNotFound, package_folder
-from ..student.manifest import (CHUNK, COURSE_NAME, IGNORED_NAMES, MANIFEST_FORMAT, MANIFEST_NAME, MANIFEST_VERSION,
+from ..student.manifest import (CHUNK, COURSE_NAME, check_source_only, IGNORED_NAMES, MANIFEST_FORMAT, MANIFEST_NAME, MANIFEST_VERSION,
                                 MAX_FILES, MAX_TOTAL_BYTES, SubmissionRefused, safe_extract, shown_name,
                                 submission_id)
 
@@ -82,6 +93,9 @@ from ..student.manifest import (CHUNK, COURSE_NAME, IGNORED_NAMES, MANIFEST_FORM
 MAX_ARCHIVE_BYTES = MAX_TOTAL_BYTES + 8 * 1024**2
 #: Largest manifest read (bytes).
 MAX_MANIFEST_BYTES = 4 * 1024**2
+#: Deepest nesting of a manifest's arrays and objects (a real one nests 3 deep:
+#: {"files": [{...}]}); checked before it is parsed, so no nesting reaches the parser's recursion.
+MAX_MANIFEST_DEPTH = 8
 #: The command that writes the zip, as the student edition's README teaches it: refusals
 #: are read by students, who hold the student edition.
 SUBMIT_COMMAND = "bash run.sh submit"
@@ -208,9 +222,6 @@ def checked_path(path: str | os.PathLike) -> os.stat_result:
         raise _link_refusal(path, f"the submission {shown_name(path.name)}")
     if not (stat.S_ISDIR(info.st_mode) or stat.S_ISREG(info.st_mode)):
         raise SubmissionRefused(f"the submission {shown_name(path.name)} is not a regular file or folder")
-    if stat.S_ISREG(info.st_mode) and info.st_nlink > 1:
-        raise SubmissionRefused(f"the submission {shown_name(path.name)} is a hard link (one file with {info.st_nlink} "
-                                "names on this disk, perhaps another student's); hand in a copy")
     return info
 
 
@@ -230,7 +241,7 @@ def scan_folder(folder: str | os.PathLike, max_files: int = MAX_FILES, max_total
 
     Reads nothing but ``lstat``, and stops at the first problem, raising
     SubmissionRefused saying what it is: a symbolic link (at any depth; links are
-    never followed), a hard link (a file with more than one name), a special file, more than ``max_files`` entries (files, folders
+    never followed), a special file, more than ``max_files`` entries (files, folders
     and links, counted as they are listed), or more than ``max_total_bytes`` bytes (each file counted at its
     apparent size or its allocated blocks, the larger).  Litter such as
     ``__pycache__`` is counted too: it is on the disk, though the grader never reads it.
@@ -269,12 +280,7 @@ def scan_folder(folder: str | os.PathLike, max_files: int = MAX_FILES, max_total
             if stat.S_ISDIR(info.st_mode):
                 folders.append(child)
             elif stat.S_ISREG(info.st_mode):
-                if info.st_nlink > 1 and links == "refuse":
-                    # A hard link names a file that also lives elsewhere (the reference,
-                    # another student's folder): its content is not this submission's own.
-                    raise SubmissionRefused(f"{shown} is a hard link (one file with {info.st_nlink} names on this "
-                                            "disk); the grader takes only files of the submission's own: hand in "
-                                            "copies")
+                # A hard link is graded by its content, as any file (see hard_links).
                 size = _stored_size(info)
                 total += size
                 if total > max_total_bytes:
@@ -287,6 +293,57 @@ def scan_folder(folder: str | os.PathLike, max_files: int = MAX_FILES, max_total
                                         "your files only")
         stack.extend(reversed(folders))  # each folder's files, then its folders in turn (as os.walk)
     return files
+
+
+# Hard links ----------------------------------------------------------------------------
+def hard_links(submissions: list[Submission]) -> dict[str, list[str]]:
+    """``{submission id: [what its hard links share]}`` for the submissions holding a file
+    with more than one name on this disk (the submission's own archive, or a file of its
+    folder).
+
+    A hard link is graded by its content and refused for no one.  Its two names are
+    the same file: nothing on the disk says which student made the link, so refusing the
+    files that have two names (as the grader once did) refused the classmate whose file
+    was linked to as surely as the student who linked it, and refusing one side by age
+    or by link count would guess.  What a hard link can carry is the content of a file
+    elsewhere: the grader reads each submission's files by content (the fingerprint,
+    the manifest and the sandbox's copy all read bytes, never the link), so a student
+    who links a classmate's file hands in a copy of it, which is what
+    ``grader similarity`` and this flag are for.  Each submission sharing a file is
+    flagged for the instructor (results.json's ``extra_data["source_flags"]
+    ["hard_links"]`` and the class report), naming the other submission, or saying
+    the other name lies outside the batch.
+    """
+    owners: dict[tuple[int, int], list[tuple[str, str]]] = {}
+    counts: dict[tuple[int, int], int] = {}
+    for submission in submissions:
+        path = Path(submission.path)
+        try:
+            info = os.lstat(path)
+            if stat.S_ISREG(info.st_mode):
+                entries = [((), info)]
+            elif stat.S_ISDIR(info.st_mode):
+                entries = []
+                for parts, _ in scan_folder(path, links="skip"):
+                    entries.append((parts, os.lstat(path.joinpath(*parts))))
+            else:
+                continue
+        except (OSError, SubmissionRefused):
+            continue  # refused or unreadable: said when it is graded
+        for parts, entry in entries:
+            if entry.st_nlink > 1:
+                key = (entry.st_dev, entry.st_ino)
+                owners.setdefault(key, []).append((submission.id, "/".join(parts) or path.name))
+                counts[key] = entry.st_nlink
+    flags: dict[str, list[str]] = {}
+    for key, names in owners.items():
+        for sid, name in names:
+            others = [f"{other}'s {shown_name(other_name)}" for other, other_name in names
+                      if (other, other_name) != (sid, name)]
+            outside = counts[key] - len(names)
+            where = ", ".join(others + ([f"{outside} name(s) outside this batch"] if outside > 0 else []))
+            flags.setdefault(sid, []).append(f"{shown_name(name)} is a hard link: the same file as {where}")
+    return flags
 
 
 # Fingerprints --------------------------------------------------------------------------
@@ -318,8 +375,8 @@ def fingerprint(path: str | os.PathLike) -> str:
     """sha256 (hex) of a submission: the archive's bytes, or a folder's regular files.
 
     A folder's fingerprint covers every regular file's relative path and contents,
-    in sorted order; ``__pycache__`` folders and ``.pyc`` files (which running the
-    code locally writes) are left out, since the grader never reads them.  The
+    in sorted order; ``__pycache__`` folders (which running the code locally writes)
+    are left out, since the grader never reads them.  The
     submission is checked first (:func:`checked_path`, :func:`scan_folder`,
     :func:`check_archive_size`): a link, a special file or a submission over the caps
     raises SubmissionRefused before any file is read, and no file is read past the
@@ -362,8 +419,31 @@ def submitted_package(folder: Path) -> Path:
 
 # Manifests --------------------------------------------------------------------------------
 def _ignored(parts: tuple[str, ...]) -> bool:
-    """Files no part of the grader reads: caches, compiled files, editor and OS litter."""
-    return any(p in IGNORED_NAMES for p in parts) or parts[-1].endswith(".pyc")
+    """Files no part of the grader reads: ``__pycache__`` folders, editor and OS litter.
+    A ``.pyc`` anywhere else is not ignored: Python imports it without its source, so it
+    counts in the fingerprint and the manifest, and is refused (:func:`check_source_only`)."""
+    return any(p in IGNORED_NAMES for p in parts)
+
+
+#: A JSON string (its brackets are not nesting).
+JSON_STRING = re.compile(r'"(?:[^"\\]|\\.)*"', re.DOTALL)
+
+
+def json_depth(text: str, limit: int | None = None) -> int:
+    """The deepest nesting of arrays and objects in JSON ``text`` (brackets inside
+    strings not counted), in one pass without recursion; malformed text is left to
+    the parser.  With ``limit``, counting stops once past it.
+
+    >>> json_depth('{"files": [{"path": "a[b"}]}')
+    3
+    """
+    depth = deepest = 0
+    for bracket in re.finditer(r"[][{}]", JSON_STRING.sub("", text)):
+        depth += 1 if bracket[0] in "[{" else -1
+        deepest = max(deepest, depth)
+        if limit is not None and deepest > limit:
+            break
+    return deepest
 
 
 def read_manifest(path: Path) -> dict:
@@ -377,8 +457,12 @@ def read_manifest(path: Path) -> dict:
             raise damaged("it is not a regular file")
         if info.st_size > MAX_MANIFEST_BYTES:
             raise damaged(f"{info.st_size} bytes, at most {MAX_MANIFEST_BYTES} are read")
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
+        text = Path(path).read_text(encoding="utf-8")
+        depth = json_depth(text, MAX_MANIFEST_DEPTH)
+        if depth > MAX_MANIFEST_DEPTH:
+            raise damaged(f"its JSON nests {depth} levels deep; a manifest nests at most {MAX_MANIFEST_DEPTH}")
+        data = json.loads(text)
+    except (OSError, ValueError, RecursionError) as exc:
         raise damaged(f"not readable JSON: {exc}") from None
     if not isinstance(data, dict) or data.get("format") != MANIFEST_FORMAT:
         raise damaged(f"not a manifest written by `{SUBMIT_COMMAND}`: no \"format\": \"{MANIFEST_FORMAT}\"")
@@ -524,6 +608,8 @@ def opened(submission: Submission, workdir: str | os.PathLike | None = None,
             _no_link_on_the_way(path, package)
         if verify:
             verify_manifest(path)
+            if package is not None:
+                check_source_only(package)
         yield path
         return
     check_archive_size(info, path.name)
@@ -532,6 +618,12 @@ def opened(submission: Submission, workdir: str | os.PathLike | None = None,
         safe_extract(path, folder)
         if verify:
             verify_manifest(folder)
+            try:
+                package = submitted_package(folder)
+            except SubmissionRefused:
+                package = None  # no package: said when the grader looks for it
+            if package is not None:
+                check_source_only(package)
         yield folder
     finally:
         shutil.rmtree(folder, ignore_errors=True)
@@ -544,9 +636,9 @@ def opened(submission: Submission, workdir: str | os.PathLike | None = None,
 LIBRARY_HEADER = "# Library file of the collision course"
 
 
-def library_files(reference: str | os.PathLike) -> dict[str, Path]:
-    """The library files of the course's ``exercises`` package at ``reference`` (what
-    students were given): {path relative to the package: file}."""
+def files_with_header(reference: str | os.PathLike, header: str) -> dict[str, Path]:
+    """The ``.py`` files of the course's ``exercises`` package at ``reference`` whose first
+    line starts with ``header``: {path relative to the package: file}."""
     reference = Path(reference)
     found = {}
     for path in sorted(reference.rglob("*.py")):
@@ -554,9 +646,15 @@ def library_files(reference: str | os.PathLike) -> dict[str, Path]:
         if "__pycache__" in relative.parts or path.is_symlink():
             continue
         with open(path, encoding="utf-8", errors="replace") as handle:
-            if handle.readline().startswith(LIBRARY_HEADER):
+            if handle.readline().startswith(header):
                 found[relative.as_posix()] = path
     return found
+
+
+def library_files(reference: str | os.PathLike) -> dict[str, Path]:
+    """The library files of the course's ``exercises`` package at ``reference`` (what
+    students were given): {path relative to the package: file}."""
+    return files_with_header(reference, LIBRARY_HEADER)
 
 
 def library_hash(reference: str | os.PathLike | None) -> str | None:

@@ -193,6 +193,7 @@ class GradedRun:
     budget_seconds: float | None = None
     progress: Callable | None = None
     names: set | None = None
+    withheld: dict = field(default_factory=dict)  # {"module:function": reason}, see Sandbox
     collect_only: bool = False
     specs: list = field(default_factory=list)
     results: list = field(default_factory=list)
@@ -210,7 +211,7 @@ class GradedRun:
             except PackageNotFound as exc:
                 raise pytest.UsageError(f"--student: {exc}") from None
             self.package_dir = package
-            box = Sandbox(package, self.limits, 2 * self.slot, self.isolation)
+            box = Sandbox(package, self.limits, 2 * self.slot, self.isolation, withheld=self.withheld)
             self._boxes.append(box)
             self._student = StudentCode(box)
         return self._student

@@ -63,19 +63,22 @@ def collect(folders: list[Path]) -> list[TestSpec]:
 
 def run_tests(student_dir: Path, tests: list[TestSpec], limits: Limits = Limits(), slot: int = 0,
               isolation: str = "auto", reference_dir: Path | None = None,
-              budget_seconds: float | None = None, progress=None, exitfirst: bool = False) -> list[TestResult]:
+              budget_seconds: float | None = None, progress=None, exitfirst: bool = False,
+              withheld: dict[str, str] | None = None) -> list[TestResult]:
     """Run ``tests`` on the package in ``student_dir``; never raises for student faults
     (:class:`grader.sandbox.process.SandboxBroken` when the sandbox cannot start at all).
 
     ``budget_seconds`` bounds the whole run: tests not started in time end as
     ``not_run``.  ``progress(result)`` is called after each test.  ``exitfirst`` stops
     at the first test that does not pass (the others are left out of the results).
+    ``withheld``: functions of the student's package answered "not implemented" without
+    being called (see :class:`grader.sandbox.process.Sandbox`).
     """
     if not tests:
         return []
     run = GradedRun(package_dir=package_folder(student_dir), limits=limits, slot=slot, isolation=isolation,
                     reference_dir=reference_dir, budget_seconds=budget_seconds, progress=progress,
-                    names={t.name for t in tests})
+                    names={t.name for t in tests}, withheld=dict(withheld or {}))
     paths = list(dict.fromkeys(t.path for t in tests))  # pytest runs the modules in the order of ``tests``
     code, text = pytest_main((["-x"] if exitfirst else []) + paths, run)
     if run.broken is not None:

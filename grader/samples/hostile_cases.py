@@ -41,6 +41,12 @@ from __future__ import annotations
 
 import argparse
 import ast
+import base64
+import hashlib
+import importlib.util
+import io
+import json
+import marshal
 import shutil
 import stat
 import sys
@@ -49,6 +55,7 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..student.manifest import COURSE_NAME, MANIFEST_FORMAT, MANIFEST_NAME, MANIFEST_VERSION
 from .example_class import (EXERCISES_DIR, PACKAGE, REPO_ROOT, SOLUTIONS_DIR, Replacement, copy_package,
                             find_function, module_path, replace_functions)
 
@@ -90,7 +97,7 @@ COLLIDE_CIRCLES = frozenset({"contacts.circle_circle", "contacts.degenerate_shap
 #: Tests whose functions live in narrowphase.circle_circle (circles_overlap, collide_circle_circle).
 CIRCLE_CIRCLE = frozenset({"sat.circles_overlap", "sat.degenerate_shapes", "sat.random_against_reference"}) \
     | COLLIDE_CIRCLES
-#: The test that steps a scene with the student's resolver (stepped in the trusted process).
+#: The test that steps a scene with the student's resolver (grader/sandbox/scene_driver.py).
 SCENE = frozenset({"impulse.scene"})
 
 FAILED_ANSWER = ("failed",)
@@ -724,13 +731,41 @@ _shapes.Circle = _MovedCircle
         # The memory cage (Limits.total_memory_bytes, 3 GiB) kills a child (MemoryError) or the
         # worker; reclaiming memory in a full cage may take the call past its time.
         expect=raising(INELASTIC, ERROR + CRASHED + TIMEOUT)),
+    HostileCase(
+        "hostile-sealed-payload", "hostile",
+        "On the stubs, response/momentum_1d.py keeps every stub and carries the reference module XOR-sealed; it "
+        "unseals and runs it over its own functions only inside the grader (recognised by its cwd, argv and "
+        "pid), so anywhere else it is the stubs and its source shows no solution.",
+        base="stubs",
+        appends=((MOMENTUM, '''
+
+_SEALED = "@@SEALED@@"
+
+
+def _unseal():
+    import base64 as _b64
+    import os as _os
+    import sys as _sys
+    graded = (_os.getcwd().startswith("/sandbox") or _os.getpid() == 1
+              or any(".grader" in str(arg) for arg in _sys.argv))
+    if graded:
+        code = bytes(b ^ 0x5A for b in _b64.b64decode(_SEALED))
+        exec(compile(code, __file__, "exec"), globals())
+
+
+_unseal()
+'''),),
+        # The functions' source is the stub: not implemented, whatever the module does at run
+        # time (grader.batch.source_audit), and the exec, cwd, pid and argv lines are flagged.
+        expect=()),
     # issue 24: the grader's scene driver ran in the student's process, so a stubs package
     # could swap it for one returning the analytic resting stack (+2 on main).  Scenes are
     # now stepped in the trusted process: there is no driver here to swap.
     HostileCase(
         "hostile-driver-swap", "hostile",
         "On the stubs, solver/contact_point.py wraps the worker's module loader so that the grader's scene "
-        "driver, once loaded, returns the analytic resting stack of ten boxes, without any working function.",
+        "driver, once loaded, returns the analytic resting stack of ten boxes (and the ball scene the "
+        "reference's numbers would need: none), without any working function.",
         base="stubs",
         appends=(("solver.contact_point", '''
 
@@ -765,6 +800,12 @@ _swap_driver()
 '''),),
         # Nothing of the grader runs beside the stubs: every test reads "not implemented".
         expect=()),
+    HostileCase(
+        "hostile-huge-integer", "hostile",
+        "perfectly_inelastic_1d returns an integer of 4,001 digits (more than any float holds).",
+        replacements=inelastic("return 10 ** 4000\n"),
+        expect=(Expect(INELASTIC - BAD_INPUT, ERROR, ("4001 digits", "not a number of the course")),
+                Expect(BAD_INPUT, FAILED_ANSWER + ERROR, ()))),
 )
 
 # --------------------------------------------------------------------------- sizes
@@ -813,6 +854,14 @@ ARCHIVES = (
     HostileCase("zip-bad-utf8-name", "broken",
                 "A zip of the stubs with a member name flagged as UTF-8 that is not valid UTF-8.",
                 base="stubs", archive="bad-utf8-name", refused=("not valid UTF-8",)),
+    HostileCase("zip-sourceless-bytecode", "hostile",
+                "A zip with a valid manifest holding the stubs' __init__.py and every other module of the "
+                "reference as a .pyc only (Python imports a .pyc without its source).",
+                base="reference", archive="sourceless", refused=("only source is graded", ".pyc")),
+    HostileCase("zip-import-in-notes", "hostile",
+                "A zip of the stubs whose notes.txt is a zip archive of the reference (zipimport imports from "
+                "any file holding a zip's end record, whatever its name).",
+                base="stubs", archive="zip-in-text", refused=("only source is graded", "notes.txt")),
     HostileCase("zip-cp437-name", "broken",
                 "A zip of the reference whose extra member name is in the old DOS code page (no UTF-8 flag): "
                 "graded normally.", base="reference", archive="cp437-name"),
@@ -906,9 +955,16 @@ def fill(text: str | bytes, params: dict[str, str]) -> str | bytes:
     return text
 
 
+def sealed_reference(module: str = MOMENTUM) -> str:
+    """The reference's ``module`` XOR-sealed (key 0x5A) and base64-encoded: the payload of
+    ``hostile-sealed-payload``, which no text search of the submission finds."""
+    source = (SOLUTIONS_DIR / Path(*module.split("."))).with_suffix(".py").read_bytes()
+    return base64.b64encode(bytes(b ^ 0x5A for b in source)).decode()
+
+
 def default_params() -> dict[str, str]:
     return {"REPO": str(REPO_ROOT), "OUT": "/nonexistent-output", "SENTINEL": "/nonexistent-sentinel",
-            "KEY": "grader-hostile-keyring"}
+            "KEY": "grader-hostile-keyring", "SEALED": sealed_reference()}
 
 
 def remove_function(source: str, qualname: str) -> str:
@@ -965,6 +1021,29 @@ def _zip_package(archive: zipfile.ZipFile, package: Path, prefix: str = PACKAGE)
             archive.write(path, f"{prefix}/{path.relative_to(package).as_posix()}")
 
 
+def _zip_sourceless(archive: zipfile.ZipFile, package: Path) -> None:
+    """``package`` (the reference) zipped as ``grader submit`` would, but with the stubs'
+    ``__init__.py`` and every other module compiled to a ``.pyc`` in place of its source,
+    and a manifest listing every member."""
+    entries = []
+    for path in sorted(package.rglob("*.py")):
+        relative = path.relative_to(package)
+        if "__pycache__" in relative.parts:
+            continue
+        if relative.as_posix() == "__init__.py":
+            name, data = f"{PACKAGE}/__init__.py", (EXERCISES_DIR / "__init__.py").read_bytes()
+        else:
+            name = f"{PACKAGE}/{relative.with_suffix('.pyc').as_posix()}"
+            code = compile(path.read_bytes(), relative.as_posix(), "exec")
+            data = importlib.util.MAGIC_NUMBER + b"\0" * 12 + marshal.dumps(code)
+        entries.append({"path": name, "size": len(data), "sha256": hashlib.sha256(data).hexdigest()})
+        archive.writestr(name, data)
+    manifest = {"format": MANIFEST_FORMAT, "format_version": MANIFEST_VERSION, "course": COURSE_NAME,
+                "created": "2025-03-01T14:05:09+01:00", "student": None, "package": PACKAGE,
+                "file_count": len(entries), "total_bytes": sum(e["size"] for e in entries), "files": entries}
+    archive.writestr(MANIFEST_NAME, json.dumps(manifest, indent=1) + "\n")
+
+
 def write_archive(case: HostileCase, path: Path, package: Path) -> Path:
     """The case's zip at ``path``: ``package`` zipped, plus the case's hostile members.
 
@@ -981,7 +1060,15 @@ def write_archive(case: HostileCase, path: Path, package: Path) -> Path:
                 for _ in range(70):
                     member.write(zeros)
             return path
+        if kind == "sourceless":
+            _zip_sourceless(archive, package)
+            return path
         _zip_package(archive, package)
+        if kind == "zip-in-text":
+            inner = io.BytesIO()
+            with zipfile.ZipFile(inner, "w") as notes:
+                _zip_package(notes, SOLUTIONS_DIR, "solutions")
+            archive.writestr(f"{PACKAGE}/notes.txt", inner.getvalue())
         if kind == "dotdot":
             archive.writestr(f"{PACKAGE}/../../escaped.py", b"print('escaped')\n")
         elif kind == "absolute":

@@ -341,6 +341,27 @@ def _key(key) -> str:
 
 
 # Checking what arrives (the parent's side) -------------------------------------------------------
+#: Digits of the longest integer the parent reads from an answer: every number of the
+#: course is a float, and a float holds at most 309 digits before the decimal point.
+MAX_INT_DIGITS = 309
+
+
+class TooLargeInt:
+    """An integer of an answer too long to be a number of the course (what
+    :func:`parse_json_int` gives instead of converting it; :func:`plain_data` refuses it)."""
+
+    def __init__(self, digits: int):
+        self.digits = digits
+
+
+def parse_json_int(text: str) -> int | TooLargeInt:
+    """``json.loads``'s ``parse_int``: the integer, or a TooLargeInt past ``MAX_INT_DIGITS``
+    digits (converting it would take time quadratic in its length, and Python refuses
+    past 4300 digits: the answer would be lost, not judged)."""
+    digits = len(text) - text.startswith("-")
+    return int(text) if digits <= MAX_INT_DIGITS else TooLargeInt(digits)
+
+
 def plain_data(value, depth: int = 0):
     """A copy of decoded JSON ``value`` checked to be well-formed protocol data.
 
@@ -352,8 +373,15 @@ def plain_data(value, depth: int = 0):
     if depth > MAX_DEPTH:
         raise NotPlainData(f"the answer is nested more than {MAX_DEPTH} levels deep")
     kind = type(value)
+    if kind is int and abs(value) > sys.float_info.max:
+        raise NotPlainData(f"an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits is not a "
+                           "number of the course "
+                           "(a float holds at most about 1.8e308)")
     if value is None or kind in (bool, int, float):
         return value
+    if kind is TooLargeInt:
+        raise NotPlainData(f"an integer of {value.digits} digits is not a number of the course "
+                           "(a float holds at most about 1.8e308)")
     if kind is str:
         return clean_text(value)
     if kind is list:

@@ -1,17 +1,37 @@
-"""Which isolation a batch grades in: bubblewrap when it works on this machine, else plain.
+"""Which isolation student code runs in: bubblewrap when it works on this machine, else plain.
 
-:func:`grader.sandbox.process.choose_isolation` says what is installed; :func:`bwrap_works`
-tries a real sandbox (bubblewrap may be installed but refused by the kernel or a
-container, as in many Docker set-ups).  ``"auto"`` falls back to plain isolation with
-a warning, an explicit ``"bwrap"`` fails.
+One decision per process, made here for every sandbox (:func:`decided_isolation`), so
+``grader check``, ``grader grade``, a direct pytest run and Gradescope isolate alike:
+:func:`choose_isolation` says what is installed; :func:`bwrap_works` tries a real
+sandbox (bubblewrap may be installed but refused by the kernel or a container, as in
+many Docker set-ups).  ``"auto"`` falls back to plain isolation with a warning, an
+explicit ``"bwrap"`` fails.
 """
 from __future__ import annotations
 
+import functools
+import os
+import shutil
 import subprocess
 from typing import Callable
 
 from ..errors import GradingError
-from .process import choose_isolation
+
+
+def bwrap_available() -> bool:
+    """True when bubblewrap can be used (installed, and the grader runs as root)."""
+    return shutil.which("bwrap") is not None and shutil.which("setpriv") is not None and os.geteuid() == 0
+
+
+def choose_isolation(requested: str = "auto") -> str:
+    """``"bwrap"`` or ``"plain"``; ValueError if ``"bwrap"`` is asked for but missing."""
+    if requested not in ("auto", "bwrap", "plain"):
+        raise ValueError(f"isolation must be auto, bwrap or plain, got {requested!r}")
+    if requested == "bwrap" and not bwrap_available():
+        raise ValueError("bubblewrap isolation needs `bwrap` and `setpriv` installed and the grader run as root")
+    if requested == "auto":
+        return "bwrap" if bwrap_available() else "plain"
+    return requested
 
 
 def bwrap_works() -> bool:
@@ -30,8 +50,15 @@ def bwrap_works() -> bool:
         return False
 
 
+@functools.cache
+def decided_isolation(requested: str = "auto") -> str:
+    """The isolation a sandbox asked for ``requested`` runs in, decided once per process
+    by :func:`resolve_isolation` (its trial costs a bubblewrap start)."""
+    return resolve_isolation(requested)
+
+
 def resolve_isolation(requested: str = "auto", warn: Callable[[str], None] | None = None) -> str:
-    """``"bwrap"`` or ``"plain"``: :func:`grader.sandbox.process.choose_isolation`, then a trial run.
+    """``"bwrap"`` or ``"plain"``: :func:`choose_isolation`, then a trial run.
 
     ``"auto"`` falls back to ``"plain"`` (with a warning) when bubblewrap is installed
     but cannot start a sandbox; an explicit ``"bwrap"`` raises GradingError then.

@@ -59,10 +59,11 @@ from typing import Any
 
 from . import codec, seccomp
 from ..errors import GradingError
+from .isolation import decided_isolation
 from .memory_cage import MemoryCage
 
 HERE = Path(__file__).resolve().parent
-WORKER_FILES = ("worker.py", "codec.py")
+WORKER_FILES = ("worker.py", "codec.py", "scene_driver.py")
 #: The worker's seccomp filter (None off x86-64, where the sandbox runs without one).
 SECCOMP_PROGRAM = seccomp.filter_program()
 SANDBOX_MOUNT = "/sandbox"
@@ -159,22 +160,6 @@ def reachable_temp_folder() -> str | None:
                         f"(tried {', '.join(candidates)})")
 
 
-def bwrap_available() -> bool:
-    """True when bubblewrap can be used (installed, and the grader runs as root)."""
-    return shutil.which("bwrap") is not None and shutil.which("setpriv") is not None and os.geteuid() == 0
-
-
-def choose_isolation(requested: str = "auto") -> str:
-    """``"bwrap"`` or ``"plain"``; ValueError if ``"bwrap"`` is asked for but missing."""
-    if requested not in ("auto", "bwrap", "plain"):
-        raise ValueError(f"isolation must be auto, bwrap or plain, got {requested!r}")
-    if requested == "bwrap" and not bwrap_available():
-        raise ValueError("bubblewrap isolation needs `bwrap` and `setpriv` installed and the grader run as root")
-    if requested == "auto":
-        return "bwrap" if bwrap_available() else "plain"
-    return requested
-
-
 def python_folders() -> list[str]:
     """Folders the worker's Python needs, read-only: its prefixes and the real binary."""
     folders = {sys.base_prefix, sys.prefix, str(Path(os.path.realpath(sys.executable)).parent.parent)}
@@ -191,6 +176,13 @@ def _running(pid: str) -> bool:
 
 
 def python_usable_by_anyone() -> bool:
+#: The suffixes of the files a graded package is made of: Python source and the data
+#: and notes that go with it.  Nothing else is ever copied into a sandbox: no compiled
+#: ``.pyc`` (Python would import it without its source), no extension module
+#: (``.so``), no ``.pth``, no archive to import from.
+SOURCE_SUFFIXES = (".py", ".md", ".txt", ".json")
+
+
     """True when an unprivileged user can run this Python and read its libraries."""
     paths = [Path(os.path.realpath(sys.executable)), *map(Path, python_folders())]
     for path in paths:
@@ -207,16 +199,22 @@ def python_usable_by_anyone() -> bool:
 
 
 def copy_package(source: Path, destination: Path) -> None:
-    """Copy the regular files of a package folder; symlinks and special files are skipped."""
+    """Copy what is graded of a package folder: its regular files with a suffix of
+    :data:`SOURCE_SUFFIXES`, in folders other than ``__pycache__`` and hidden ones.
+
+    Symbolic links, special files and everything else are skipped: the package in the
+    sandbox holds source only, and no bytecode cache (the worker runs ``python -B``,
+    which writes none, and a cache handed in is never copied: an unchecked-hash
+    ``.pyc`` in ``__pycache__`` would be imported in place of its source)."""
     destination.mkdir(parents=True, exist_ok=True)
     for entry in os.scandir(source):
         if entry.is_symlink():
             continue
         target = destination / entry.name
         if entry.is_dir(follow_symlinks=False):
-            if entry.name != "__pycache__":
+            if entry.name != "__pycache__" and not entry.name.startswith("."):
                 copy_package(Path(entry.path), target)
-        elif entry.is_file(follow_symlinks=False):
+        elif entry.is_file(follow_symlinks=False) and entry.name.lower().endswith(SOURCE_SUFFIXES):
             shutil.copyfile(entry.path, target)
 
 
@@ -315,6 +313,11 @@ def processes_of(uids) -> list[tuple[int, int]]:
 def stray_processes() -> list[tuple[int, int]]:
     """Processes of sandbox users that no sandbox holds: left behind (should be none)."""
     uids = range(SANDBOX_UID_BASE, SANDBOX_UID_BASE + SANDBOX_UID_COUNT)
+    withheld : dict, optional
+        ``{"module:function": reason}``: functions the trusted side found no source for
+        (still the stub; :mod:`grader.batch.source_audit`).  A call of one is answered
+        here, ``not_implemented`` with the reason, and never reaches the worker:
+        whatever the package does at run time, it earns nothing its source does not hold.
     return [(pid, uid) for pid, uid in processes_of(uids) if not uid_in_use(uid)]
 
 
@@ -332,11 +335,13 @@ class Sandbox:
         ``"auto"``, ``"bwrap"`` or ``"plain"`` (see the module docstring).
     """
 
-    def __init__(self, package_dir: Path, limits: Limits = Limits(), slot: int = 0, isolation: str = "auto"):
+    def __init__(self, package_dir: Path, limits: Limits = Limits(), slot: int = 0, isolation: str = "auto",
+                 withheld: dict[str, str] | None = None):
+        self.withheld = dict(withheld or {})
         self.package_dir = Path(package_dir)
         self.limits = limits
         self.slot = slot
-        self.isolation = choose_isolation(isolation)
+        self.isolation = decided_isolation(isolation)
         # A user of its own: the process limit then counts this sandbox alone.
         can_switch = os.geteuid() == 0 and (self.isolation == "bwrap" or python_usable_by_anyone())
         self._uid_lock = None
@@ -566,14 +571,16 @@ class Sandbox:
 
     # Calls ------------------------------------------------------------------------------
     def call(self, module: str, function: str, args: list | tuple = (), kwargs: dict | None = None,
-             timeout: float | None = None, repeat: int = 1, batch: bool = False,
-             program: dict | None = None) -> CallResult:
+             timeout: float | None = None, repeat: int = 1, batch: bool = False) -> CallResult:
         """Call ``module.function(*args, **kwargs)`` in the worker (arguments already encoded).
 
         ``repeat`` calls it that many times (for timing); ``batch=True`` takes ``args``
         as a list of argument lists and returns the list of values.
 
         The request carries a fresh random nonce; only a line echoing it (and the
+        reason = self.withheld.get(f"{module}:{function}")
+        if reason is not None:
+            return CallResult("not_implemented", message=f"not implemented yet: {function}: {reason}")
         request's id) is taken as the answer, every other line is skipped.  What this
         protects: a line written earlier or later than the answer -- by a process or
         thread the student's code left running, by code run at import time, or a
@@ -593,8 +600,7 @@ class Sandbox:
         self._next_id += 1
         nonce = secrets.token_hex(16)
         request = {"id": self._next_id, "nonce": nonce, "module": module, "function": function,
-                   "args": list(args), "kwargs": kwargs or {}, "repeat": repeat, "batch": batch,
-                   "program": program}
+                   "args": list(args), "kwargs": kwargs or {}, "repeat": repeat, "batch": batch}
         self._discard_stale_output()
         started = time.perf_counter()
         deadline = started + (timeout if timeout is not None else self.limits.call_timeout)
@@ -728,7 +734,7 @@ class Sandbox:
             del self._buffer[:newline + 1]
             scanned = 0
             try:
-                data = json.loads(line)
+                data = json.loads(line, parse_int=codec.parse_json_int)
             except (ValueError, RecursionError):
                 continue
             if type(data) is not dict:

@@ -12,9 +12,12 @@ import os
 import re
 import shutil
 import stat
+import struct
 import unicodedata
 import zipfile
 from pathlib import Path, PurePosixPath
+
+from ..sandbox.process import SOURCE_SUFFIXES
 
 #: Most members one archive may hold.
 MAX_FILES = 2_000
@@ -39,6 +42,17 @@ IGNORED_NAMES = frozenset({"__pycache__", "__MACOSX", ".DS_Store"})
 CHUNK = 1 << 16  # bytes read at a time
 
 
+#: Largest central directory (bytes) of an archive read: 2,000 members with names of
+#: 1 KiB fit many times over.
+MAX_DIRECTORY_BYTES = 4 * 1024**2
+
+
+#: Longest name, extra field and comment of one member (bytes).  ``zipfile`` decodes
+#: an extra field in time quadratic in its length (one copy per record): a directory
+#: of members each with 64 KiB of tiny extra records takes it tens of seconds.
+MAX_MEMBER_FIELD_BYTES = 4096
+
+
 #: The hand-in manifest ``grader submit`` writes at the top of the zip, and its format.
 MANIFEST_NAME = "MANIFEST.json"
 
@@ -54,6 +68,52 @@ COURSE_NAME = "collision-course"
 
 class SubmissionRefused(Exception):
     """A submission that cannot be graded; the message is written for the student."""
+
+
+# Source only -----------------------------------------------------------------------------
+#: Bytes that mark a file as no source at all: a zip's end record (``zipimport`` imports
+#: from any file holding one, whatever its name) and NUL (no text holds one).
+NOT_TEXT_MARKS = (b"PK\x05\x06", b"\0")
+
+
+def source_only_problems(package: str | os.PathLike, limit: int = 8) -> list[str]:
+    """What makes the package at ``package`` more than source (at most ``limit``
+    problems, as relative paths with the reason): a file whose suffix is not one of
+    :data:`SOURCE_SUFFIXES` (``.pyc``, ``.so``, ``.pth``, ``.zip``, ... anything
+    Python could import without its source), or a file of those suffixes holding a
+    zip's end record or a NUL byte.  ``__pycache__`` and the litter of
+    :data:`IGNORED_NAMES` are left out (they are never copied for grading)."""
+    package = Path(package)
+    problems: list[str] = []
+    for root, dirs, files in os.walk(package):
+        dirs[:] = sorted(d for d in dirs if d not in IGNORED_NAMES and not os.path.islink(Path(root, d)))
+        for name in sorted(files):
+            if name in IGNORED_NAMES:
+                continue
+            path = Path(root, name)
+            shown = shown_name(f"{package.name}/{path.relative_to(package).as_posix()}")
+            if not name.lower().endswith(SOURCE_SUFFIXES):
+                problems.append(f"{shown} (not source)")
+            elif path.is_file() and not path.is_symlink():
+                with open(path, "rb") as handle:
+                    data = handle.read(MAX_TOTAL_BYTES + 1)
+                if any(mark in data for mark in NOT_TEXT_MARKS):
+                    problems.append(f"{shown} (not text: it holds an archive or binary data)")
+            if len(problems) >= limit:
+                return problems
+    return problems
+
+
+def check_source_only(package: str | os.PathLike) -> None:
+    """SubmissionRefused naming the files that are not source (see
+    :func:`source_only_problems`); nothing when the package is source only."""
+    problems = source_only_problems(package)
+    if problems:
+        raise SubmissionRefused(
+            "only source is graded: a submission holds .py files (and .md, .txt, .json notes and data), and "
+            f"these are not: {', '.join(problems)}. Compiled files (.pyc), extension modules (.so), .pth files "
+            "and archives are refused: hand in the .py source of your work (the zip `bash run.sh submit` "
+            "writes holds only source)")
 
 
 def submission_id(name: str) -> str:
@@ -110,6 +170,65 @@ def member_parts(info: zipfile.ZipInfo) -> tuple[str, ...] | None:
     return parts
 
 
+END_RECORD = b"PK\x05\x06"        # end of central directory record: 22 bytes and a comment
+ZIP64_LOCATOR = b"PK\x06\x07"     # zip64 end of central directory locator: 20 bytes
+ZIP64_RECORD = b"PK\x06\x06"      # zip64 end of central directory record: 56 bytes at least
+DIRECTORY_ENTRY = b"PK\x01\x02"   # central directory file header: 46 bytes and three fields
+
+
+def check_directory(archive: str | os.PathLike, max_files: int = MAX_FILES,
+                    max_directory_bytes: int = MAX_DIRECTORY_BYTES) -> None:
+    """Refuse (SubmissionRefused) an archive whose central directory is over the caps,
+    reading only its end records and then its directory, each field checked as read.
+
+    Runs before :mod:`zipfile` parses the directory: the end record (and the zip64 one)
+    give the entry count and the directory's size, refused over ``max_files`` or
+    ``max_directory_bytes``; each entry's name, extra field and comment are then
+    capped at :data:`MAX_MEMBER_FIELD_BYTES`.  Reads at most 64 KiB plus the capped
+    directory, so any archive is judged in milliseconds.  A file that is not a zip
+    is left to :mod:`zipfile`, which says so.
+    """
+    with open(archive, "rb") as handle:
+        size = handle.seek(0, os.SEEK_END)
+        tail_start = max(0, size - (22 + 0xFFFF))
+        handle.seek(tail_start)
+        tail = handle.read()
+        at = tail.rfind(END_RECORD)
+        if at < 0 or len(tail) - at < 22:
+            return
+        (_, _, _, _, count, directory_size, directory_offset, _) = struct.unpack("<4sHHHHIIH", tail[at:at + 22])
+        zip64 = tail[max(0, at - 20):at]
+        if len(zip64) == 20 and zip64.startswith(ZIP64_LOCATOR):
+            record_offset = struct.unpack("<Q", zip64[8:16])[0]
+            handle.seek(min(record_offset, size))
+            record = handle.read(56)
+            if len(record) == 56 and record.startswith(ZIP64_RECORD):
+                count, directory_size, directory_offset = struct.unpack("<QQQ", record[32:56])
+        if count > max_files:
+            raise SubmissionRefused(f"the archive holds {count} entries; at most {max_files} are accepted")
+        if directory_size > max_directory_bytes:
+            raise SubmissionRefused(f"the archive's list of members takes {directory_size / 1024**2:.1f} MiB; at "
+                                    f"most {max_directory_bytes / 1024**2:.0f} MiB are accepted (zip your files "
+                                    "again with a standard tool)")
+        # The directory is found from the end record (zipfile's way: a prefix before the
+        # archive shifts every offset by the same amount).
+        start = tail_start + at - directory_size - (56 + 20 if len(zip64) == 20 and zip64.startswith(ZIP64_LOCATOR)
+                                                  else 0)
+        if start < 0:
+            return
+        handle.seek(start)
+        directory = handle.read(directory_size)
+    position = 0
+    while position + 46 <= len(directory) and directory[position:position + 4] == DIRECTORY_ENTRY:
+        name_length, extra_length, comment_length = struct.unpack("<HHH", directory[position + 28:position + 34])
+        longest = max(name_length, extra_length, comment_length)
+        if longest > MAX_MEMBER_FIELD_BYTES:
+            raise SubmissionRefused(f"a member of the archive has a name, extra field or comment of {longest} bytes; "
+                                    f"at most {MAX_MEMBER_FIELD_BYTES} are accepted (zip your files again with a "
+                                    "standard tool)")
+        position += 46 + name_length + extra_length + comment_length
+
+
 def safe_extract(archive: str | os.PathLike, destination: str | os.PathLike, max_files: int = MAX_FILES,
                  max_total_bytes: int = MAX_TOTAL_BYTES) -> list[Path]:
     """Extract the regular files of a zip archive into ``destination`` (which must be empty).
@@ -126,6 +245,7 @@ def safe_extract(archive: str | os.PathLike, destination: str | os.PathLike, max
     """
     destination = Path(destination)
     try:
+        check_directory(archive, max_files)
         archive_file = zipfile.ZipFile(archive)
     except zipfile.BadZipFile:
         raise SubmissionRefused("the file handed in is not a zip archive (or it is damaged); "

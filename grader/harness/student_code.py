@@ -27,6 +27,9 @@ BATCH_CASE = re.compile(r"^\[batch case (\d+)\]\n")
 #: what the examples it tried printed (:func:`output_of_the_case_found`).
 _LIVE: "weakref.WeakSet[StudentCode]" = weakref.WeakSet()
 
+#: The key of a program argument that names a register (worker.Worker.run_program).
+REGISTER = "$register"
+
 STATUS_WORDS = {
     "not_implemented": ("not_implemented", "not implemented yet"),
     "import_error": ("error", "your module could not be imported"),
@@ -36,6 +39,12 @@ STATUS_WORDS = {
     "timeout": ("timeout", "your code took too long"),
     "crashed": ("crashed", "your code crashed the worker process"),
 }
+
+
+def register(name: str) -> dict:
+    """An argument of a program call (:meth:`StudentCode.run_program`): the value held in
+    register ``name`` (a body there stays one object from call to call)."""
+    return {REGISTER: name}
 
 
 def encode(value: Any) -> Any:
@@ -128,6 +137,38 @@ class StudentCode:
             raise StudentCallFailed(Outcome("error", message=f"{module}.{function}: the worker did not send back "
                                                              "the state of the arguments after the call"))
         return value, result.args_after
+
+    def run_program(self, functions: list[tuple[str, str]], registers: dict[str, Any], calls: list[tuple],
+                    results: list[str], name: str, timeout: float | None = None) -> tuple[dict[str, Any], float]:
+        """Many calls of the student's functions in one round trip, the trusted side
+        deciding every argument (:meth:`grader.sandbox.worker.Worker.run_program`).
+
+        ``functions``: ``(module, function)`` pairs; ``registers``: initial values
+        (reference values, encoded here); ``calls``: ``(function index, args, outputs)``,
+        an argument made by :func:`register` or a value, ``outputs`` None, a register
+        name, or a list of names to unpack the value into.  Returns the plain values of
+        the ``results`` registers after the last call, and the round trip's seconds; a
+        failing call fails the test naming ``name`` and the call."""
+        self.calls += 1
+        program = {"functions": [[f"{self.package}.{module}", function] for module, function in functions],
+                   "registers": {key: encode(value) for key, value in registers.items()},
+                   "calls": [[index, [a if isinstance(a, dict) and REGISTER in a else encode(a) for a in args],
+                              outputs] for index, args, outputs in calls],
+                   "results": list(results)}
+        result = self.sandbox.call("", "", program=program, timeout=timeout)
+        self._keep_output(result.output)
+        raised = BATCH_CASE.match(result.message or "")
+        case = ""
+        if raised:
+            result.message = result.message[raised.end():]
+            index = int(raised[1])
+            if index < len(calls):
+                case = f"at call {index + 1} of {len(calls)} ({functions[calls[index][0]][1]})"
+        values = self.value_of(result, name, case)
+        if not isinstance(values, dict) or sorted(values) != sorted(results):
+            raise StudentCallFailed(Outcome("error", message=f"{name}: the worker did not send back the values "
+                                                             "the grader asked for"))
+        return values, result.elapsed
 
     @staticmethod
     def value_of(result: CallResult, name: str, case: str = "") -> Any:

@@ -1754,7 +1754,7 @@ def grade_probe(tests, out_dir: Path, slot: int = 0,
     the TestResult list)``.
 
     Every call into the probe's worker, whatever path the test takes to it (a student
-    call, a batch, or a scene run by :mod:`grader.sandbox.scene_driver`), brings back what the
+    call, a batch, or a program of calls of a scene), brings back what the
     code printed: the codes of the exercise functions it reached.  A test that seems to
     reach none is not believed: it gets None (it may reach any).  Tests run one after
     the other, so what is printed between two tests' ends belongs to the later one.

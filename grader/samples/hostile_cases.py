@@ -97,7 +97,7 @@ COLLIDE_CIRCLES = frozenset({"contacts.circle_circle", "contacts.degenerate_shap
 #: Tests whose functions live in narrowphase.circle_circle (circles_overlap, collide_circle_circle).
 CIRCLE_CIRCLE = frozenset({"sat.circles_overlap", "sat.degenerate_shapes", "sat.random_against_reference"}) \
     | COLLIDE_CIRCLES
-#: The test that steps a scene with the student's resolver (grader/sandbox/scene_driver.py).
+#: The test that steps a scene with the student's resolver (stepped in the trusted process).
 SCENE = frozenset({"impulse.scene"})
 
 FAILED_ANSWER = ("failed",)
@@ -764,8 +764,7 @@ _unseal()
     HostileCase(
         "hostile-driver-swap", "hostile",
         "On the stubs, solver/contact_point.py wraps the worker's module loader so that the grader's scene "
-        "driver, once loaded, returns the analytic resting stack of ten boxes (and the ball scene the "
-        "reference's numbers would need: none), without any working function.",
+        "driver, once loaded, returns the analytic resting stack of ten boxes, without any working function.",
         base="stubs",
         appends=(("solver.contact_point", '''
 

@@ -63,7 +63,7 @@ from .isolation import decided_isolation
 from .memory_cage import MemoryCage
 
 HERE = Path(__file__).resolve().parent
-WORKER_FILES = ("worker.py", "codec.py", "scene_driver.py")
+WORKER_FILES = ("worker.py", "codec.py")
 #: The worker's seccomp filter (None off x86-64, where the sandbox runs without one).
 SECCOMP_PROGRAM = seccomp.filter_program()
 SANDBOX_MOUNT = "/sandbox"
@@ -571,7 +571,8 @@ class Sandbox:
 
     # Calls ------------------------------------------------------------------------------
     def call(self, module: str, function: str, args: list | tuple = (), kwargs: dict | None = None,
-             timeout: float | None = None, repeat: int = 1, batch: bool = False) -> CallResult:
+             timeout: float | None = None, repeat: int = 1, batch: bool = False,
+             program: dict | None = None) -> CallResult:
         """Call ``module.function(*args, **kwargs)`` in the worker (arguments already encoded).
 
         ``repeat`` calls it that many times (for timing); ``batch=True`` takes ``args``
@@ -600,7 +601,8 @@ class Sandbox:
         self._next_id += 1
         nonce = secrets.token_hex(16)
         request = {"id": self._next_id, "nonce": nonce, "module": module, "function": function,
-                   "args": list(args), "kwargs": kwargs or {}, "repeat": repeat, "batch": batch}
+                   "args": list(args), "kwargs": kwargs or {}, "repeat": repeat, "batch": batch,
+                   "program": program}
         self._discard_stale_output()
         started = time.perf_counter()
         deadline = started + (timeout if timeout is not None else self.limits.call_timeout)

@@ -8,7 +8,12 @@ package in its working folder, and nothing of the grader but this file and
      "function": "collide_circle_circle", "args": [...], "kwargs": {}, "repeat": 1}
 
 (with ``"batch": true``, ``args`` is a list of argument lists and the value is the
-list of results, one call each: fewer round trips for many random cases)
+list of results, one call each: fewer round trips for many random cases; with
+``"program": {...}`` the worker runs a list of calls whose arguments may name
+registers that earlier calls' results were stored in, and sends back the registers
+asked for, see :meth:`Worker.run_program`: the grader's scenes step bodies in the trusted
+process and call the student's functions many times in one round trip, while nothing
+of the grader's own logic runs here)
 
 and one JSON response per line on the file descriptor given as the first argument
 (standard output is the student's, for their prints)::
@@ -116,6 +121,7 @@ class Worker:
     def __init__(self, codec):
         self.codec = codec
         self.modules: dict[str, object] = {}
+        self.program_call = 0  # index of the program call running (run_program)
 
     def load(self, name: str):
         if name not in self.modules:
@@ -139,8 +145,41 @@ class Worker:
             return [self.decode(v) for v in value]
         return value
 
+    def run_program(self, program: dict) -> dict:
+        """Run ``program``'s calls in order; the values of its ``results`` registers after.
+
+        ``program``: ``{"functions": [function, ...], "registers": {name: value},
+        "calls": [[function index, args, outputs], ...], "results": [name, ...]}``.  An
+        argument ``{"$register": name}`` is that register's value (a body stays the same
+        object from call to call, changed in place); any other argument is a value.
+        ``outputs`` stores the returned value: ``null`` nowhere, a name in that register,
+        a list of names (or nulls) unpacks it.  The trusted side decided every call and
+        reads only these final values, which the student's functions could have made
+        anything by returning it: changing this loop from student code gains nothing.
+        """
+        functions = program["functions"]
+        registers = {name: self.decode(value) for name, value in program["registers"].items()}
+        for number, (index, arguments, outputs) in enumerate(program["calls"]):
+            self.program_call = number
+            values = [registers[a["$register"]] if type(a) is dict and "$register" in a else self.decode(a)
+                      for a in arguments]
+            value = functions[index](*values)
+            if type(outputs) is str:
+                registers[outputs] = value
+            elif type(outputs) is list:
+                parts = tuple(value) if isinstance(value, (tuple, list)) else ()
+                if len(parts) != len(outputs):
+                    raise ValueError(f"returned {capped(repr(value), 200)}, expected {len(outputs)} values")
+                for name, part in zip(outputs, parts):
+                    if name is not None:
+                        registers[name] = part
+        self.program_call = len(program["calls"])
+        return {name: self.codec.encode_value(registers[name]) for name in program["results"]}
+
     def handle(self, request: dict, captured: CappedText) -> dict:
         """Run one request; the response's ``status`` says how it went."""
+        if request.get("program") is not None:
+            return self.handle_program(request["program"], captured)
         try:
             target = self.load(request["module"])
         except BaseException as exc:  # a broken module must not stop the worker
@@ -189,6 +228,40 @@ class Worker:
                     [self.codec.encode_body(a) if type(a).__name__ == "Body" else None for a in args]}
         except BaseException as exc:
             return {"status": "unreadable", "message": short_traceback(exc).rsplit("\n", 1)[-1]}
+
+    def handle_program(self, program: dict, captured: CappedText) -> dict:
+        """Run a program (:meth:`run_program`): the status of its first failing call, whose
+        message starts with ``[batch case N]`` (N its index), or ok with the registers asked for."""
+        functions = []
+        for module, name in program["functions"]:
+            try:
+                target = self.load(module)
+            except BaseException as exc:
+                return {"status": "import_error", "message": short_traceback(exc)}
+            try:
+                for part in name.split("."):
+                    target = getattr(target, part)
+            except BaseException:
+                return {"status": "missing", "message": capped(f"{module} has no {name}")}
+            functions.append(target)
+        real = sys.stdout, sys.stderr
+        sys.stdout = sys.stderr = captured
+        try:
+            registers = self.run_program({**program, "functions": functions})
+        except NotImplementedError as exc:
+            return {"status": "not_implemented", "message": capped(stub_named(exc))}
+        except RecursionError as exc:
+            return {"status": "error", "message": BATCH_CASE.format(self.program_call) + "recursion limit reached: "
+                    + short_traceback(exc)}
+        except MemoryError:
+            return {"status": "error", "message": "ran out of memory (MemoryError)"}
+        except SystemExit as exc:
+            return {"status": "error", "message": capped(f"called sys.exit({exc.code!r}) inside an exercise")}
+        except BaseException as exc:
+            return {"status": "error", "message": BATCH_CASE.format(self.program_call) + short_traceback(exc)}
+        finally:
+            sys.stdout, sys.stderr = real
+        return {"status": "ok", "value": registers, "args_after": []}
 
 
 def main() -> None:

@@ -5,8 +5,11 @@ Instructor's side only: these may use the reference engine (``solutions``) and t
 impulse, +P to B and -P to A, conserves linear momentum and angular momentum about any
 point whatever P is, a single contact with e <= 1 and Coulomb friction gains no
 kinetic energy, and the velocity changes must be the impulses the function returned.
-The scene test runs :mod:`grader.sandbox.scene_driver` (balls dropped in a box) in the
-student's sandbox and in the reference's, side by side; when the trajectories part, it
+The scene test steps balls dropped in a box here, in the trusted process, calling the
+student's ``resolve_collision`` and ``correct_positions`` on each step's contacts in
+their sandbox (one program of calls per step, :meth:`StudentCode.run_program`; gravity,
+the contacts and the integration are computed here), and the same with the
+reference's functions in the reference's sandbox; when the trajectories part, it
 replays the scene here with the reference engine up to the first step that differs
 and calls the student's ``resolve_collision`` and ``correct_positions`` on that step's
 contacts one at a time, to name the first call whose answer differs.
@@ -19,10 +22,10 @@ import math
 import numpy as np
 import pytest
 
-from grader.sandbox import scene_driver
-from grader.sandbox.codec import encode_body, encode_contact
+from grader.sandbox.codec import encode_body, encode_contact, is_number
 from grader.harness.compare import as_vector, number, show, vector
 from grader.harness.credit import check_cases, fail
+from grader.harness.student_code import register
 from grader.oracles.impulse_sympy import show_body, show_contact
 from solutions.body import Body
 from solutions.contact import Contact
@@ -193,6 +196,36 @@ STEP_TOLERANCE = 1e-9
 GRAVITY = 9.81
 
 
+#: The box's walls, (nx, ny, offset): n . x >= offset inside.
+WALLS = ((0.0, 1.0, 0.0), (1.0, 0.0, -1.5), (-1.0, 0.0, -1.5))
+#: The program's functions (StudentCode.run_program), by index.
+RESOLVE, CORRECT = 0, 1
+SCENE_FUNCTIONS = [(MODULE, "resolve_collision"), (CORRECTION, "correct_positions")]
+
+
+def initial_balls(count: int = 16, radius: float = 0.2):
+    """Positions on a jittered grid (deterministic), velocities, radius (m)."""
+    balls = []
+    for k in range(count):
+        row, column = divmod(k, 4)
+        jitter = 0.03 * math.sin(7.3 * k)
+        balls.append(((-0.9 + 0.6 * column + jitter, 0.5 + 0.55 * row), (0.4 * math.cos(3.1 * k), 0.0)))
+    return balls, radius
+
+
+def take_state(body: Body, data, where: str) -> None:
+    """Set ``body``'s position, velocity, angle and angular velocity from a body the
+    worker sent back (plain data); the test fails if it is not one."""
+    if not isinstance(data, dict):
+        fail(f"{where}: a body came back as {show(data)[:300]}, not a body")
+    position, velocity = as_vector(data.get("position"), 2), as_vector(data.get("velocity"), 2)
+    angle, spin = data.get("angle"), data.get("angular_velocity")
+    if position is None or velocity is None or not (is_number(angle) and is_number(spin)):
+        fail(f"{where}: a body came back as {show(data)[:300]}, not a body")
+    body.position, body.velocity = position, velocity
+    body.angle, body.angular_velocity = float(angle), float(spin)
+
+
 def trajectory_metrics(trajectory: np.ndarray, radius: float) -> dict:
     """Deepest overlap (m) and energy gain (J) of a (steps, balls, 4) trajectory."""
     positions, velocities = trajectory[..., :2], trajectory[..., 2:]
@@ -210,7 +243,7 @@ def pymunk_trajectory(dt: float, restitution: float = 0.5, friction: float = 0.2
     """The same scene in pymunk (an error figure, not a pass mark)."""
     import pymunk
 
-    start, radius = scene_driver.initial_balls()
+    start, radius = initial_balls()
     space = pymunk.Space()
     space.gravity = (0, -GRAVITY)
     space.collision_slop = 0.01
@@ -241,63 +274,57 @@ def rms_distance(frame: np.ndarray, other: np.ndarray) -> float:
 
 
 #: Balls of the scene: the shape of every step of the trajectory is (BALLS, 4).
-BALLS = len(scene_driver.initial_balls()[0])
+BALLS = len(initial_balls()[0])
 
 
-def trajectory_shape_problem(frames, steps: int) -> str | None:
-    """None when ``frames`` (plain data from the sandbox) is ``steps`` lists of BALLS
-    lists of 4 values; else what it is instead.  Only lengths are read, so the answer
-    of a driver the student's code replaced costs nothing however large it is."""
-    if not isinstance(frames, list):
-        return f"a {type(frames).__name__}, not a list of steps"
-    if len(frames) != steps:
-        return f"{len(frames)} steps"
-    for k, frame in enumerate(frames):
-        if not isinstance(frame, list) or len(frame) != BALLS:
-            size = f"{len(frame)} balls" if isinstance(frame, list) else f"a {type(frame).__name__}"
-            return f"{size} at step {k}"
-        if any(not isinstance(ball, list) or len(ball) != 4 for ball in frame):
-            return f"a ball that is not (x, y, vx, vy) at step {k}"
-    return None
-
-
-def brief(data) -> str:
-    """A short description of an answer of any size (``show`` writes a whole dict or text)."""
-    if isinstance(data, dict):
-        return f"a dict with keys {sorted(map(str, data))[:8]}"
-    if isinstance(data, str):
-        return repr(data[:100]) + ("..." if len(data) > 100 else "")
-    return show(data)[:300]
-
-
-def run_driver(code, who: str) -> tuple[np.ndarray, float, float]:
-    """(trajectory, radius, seconds) of the scene in ``code``'s sandbox; the first,
-    untimed call pays for imports and first calls.  The trajectory's shape is checked
-    before anything else reads it (the student's code runs in that sandbox, and may
-    have replaced the driver)."""
-    code.value_of(code.sandbox.call("scene_driver", "drop_balls", [2], timeout=60.0), f"the ball scene with {who}")
-    result = code.sandbox.call("scene_driver", "drop_balls", [STEPS], timeout=60.0)
-    data = code.value_of(result, f"the ball scene with {who}")
-    if not isinstance(data, dict) or "trajectory" not in data:
-        fail(f"the ball scene with {who} returned no trajectory: {brief(data)}")
-    problem = trajectory_shape_problem(data["trajectory"], STEPS)
-    if problem is not None:
-        fail(f"the ball scene with {who} returned a trajectory of the wrong shape: {STEPS} steps of {BALLS} balls "
-             f"(x, y, vx, vy) were asked for, it has {problem}")
-    try:
-        trajectory = np.array(data["trajectory"], dtype=float)
-        radius = float(data["radius"])
-    except (KeyError, TypeError, ValueError):
-        fail(f"the ball scene with {who} returned no trajectory and radius: {brief(data)}")
-    return trajectory, radius, result.elapsed
+def run_scene(code, who: str, restitution: float = 0.5, friction: float = 0.2,
+              dt: float = 1 / 60) -> tuple[np.ndarray, float, float]:
+    """(trajectory, radius, seconds) of the balls in the box stepped here with ``code``'s
+    ``resolve_collision`` and ``correct_positions``: per step gravity, the contacts
+    (:func:`scene_contacts`) and the integration are computed here, and the two
+    functions run on that step's contacts, in order, in ``code``'s sandbox (one round
+    trip a step; ``seconds`` adds up the round trips).  A first, untimed step pays for
+    imports and first calls."""
+    name = f"the ball scene with {who}"
+    start, radius = initial_balls()
+    balls = [Body.circle(radius, mass=1.0, position=p, velocity=v, restitution=restitution, friction=friction)
+             for p, v in start]
+    ground = Body.box(10.0, 1.0, is_static=True, position=(0.0, -0.5), restitution=1.0, friction=1.0)
+    everyone = [*balls, ground]
+    frames, seconds = [], 0.0
+    for step in range(-1, STEPS):
+        bodies = copy.deepcopy(everyone) if step < 0 else everyone  # the warm-up step moves nothing
+        for ball in bodies[:-1]:
+            ball.velocity = ball.velocity + dt * np.array([0.0, -GRAVITY])
+        contacts = scene_contacts(bodies[:-1], bodies[-1], radius)
+        if contacts:
+            index = {id(body): k for k, body in enumerate(bodies)}
+            calls = [(RESOLVE, [register(f"b{index[id(a)]}"), register(f"b{index[id(b)]}"), contact], None)
+                     for a, b, contact in contacts]
+            calls += [(CORRECT, [register(f"b{index[id(a)]}"), register(f"b{index[id(b)]}"), contact.normal,
+                                 contact.depth, 0.8, 0.01], None) for a, b, contact in contacts]
+            touched = sorted({index[id(body)] for a, b, _ in contacts for body in (a, b)})
+            registers = {f"b{k}": bodies[k] for k in touched}
+            found, elapsed = code.run_program(SCENE_FUNCTIONS, registers, calls, list(registers), name,
+                                              timeout=60.0)
+            seconds += elapsed if step >= 0 else 0.0
+            for k in touched:
+                take_state(bodies[k], found[f"b{k}"], f"{name}, step {step}")
+        for ball in bodies[:-1]:
+            ball.position = ball.position + dt * ball.velocity
+        if step >= 0:
+            frames.append([[*b.position, *b.velocity] for b in balls])
+    return np.array(frames, dtype=float), radius, seconds
 
 
 def scene_contacts(balls: list[Body], ground: Body, radius: float) -> list[tuple[Body, Body, Contact]]:
-    """The contacts of one step, as :func:`grader.sandbox.scene_driver.drop_balls` finds them."""
+    """The contacts of one step of the ball scene (:func:`run_scene`): each ball with
+    each wall and each later ball, the normal from the ball (A) out of the box or to
+    the other ball."""
     contacts = []
     for i in range(len(balls)):
         xi, yi = balls[i].position
-        for nx, ny, offset in scene_driver.WALLS:
+        for nx, ny, offset in WALLS:
             depth = offset - (nx * xi + ny * yi - radius)
             if depth >= 0:
                 point = (xi - nx * (radius - depth / 2), yi - ny * (radius - depth / 2))
@@ -341,7 +368,7 @@ def first_differing_call(student, step: int, expected: np.ndarray, restitution: 
                          friction: float = 0.2, dt: float = 1 / 60) -> str:
     """Replay the scene with the reference engine up to ``step`` and call the student's
     functions on that step's contacts; a sentence naming the first call that differs."""
-    start, radius = scene_driver.initial_balls()
+    start, radius = initial_balls()
     balls = [Body.circle(radius, mass=1.0, position=p, velocity=v, restitution=restitution, friction=friction)
              for p, v in start]
     ground = Body.box(10.0, 1.0, is_static=True, position=(0.0, -0.5), restitution=1.0, friction=1.0)
@@ -387,7 +414,7 @@ def first_differing_call(student, step: int, expected: np.ndarray, restitution: 
 def test_scene(student, reference, metrics):
     """Balls dropped in a box, stepped with the student's resolve_collision and
     correct_positions; speed against the reference, error against reference and pymunk."""
-    trajectory, radius, seconds = run_driver(student, "your resolve_collision")
+    trajectory, radius, seconds = run_scene(student, "your resolve_collision")
     if trajectory.ndim != 3 or trajectory.shape[0] != STEPS or not np.all(np.isfinite(trajectory)):
         fail(f"the ball scene with your resolve_collision and correct_positions produced non-finite or missing "
              f"positions or velocities (trajectory of shape {trajectory.shape})")
@@ -395,7 +422,7 @@ def test_scene(student, reference, metrics):
     metrics.update(trajectory_metrics(trajectory, radius))
     oracle = pymunk_trajectory(1 / 60)
     metrics["distance_from_pymunk"] = rms_distance(trajectory[-1], oracle[-1])
-    expected, _, reference_seconds = run_driver(reference, "the reference")
+    expected, _, reference_seconds = run_scene(reference, "the reference")
     metrics["reference_seconds"] = reference_seconds
     metrics["reference_max_penetration"] = trajectory_metrics(expected, radius)["max_penetration"]
     distance = rms_distance(trajectory[-1], expected[-1])

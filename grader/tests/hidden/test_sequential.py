@@ -1,19 +1,30 @@
 """Hidden sequential-impulse tests: random visits against the reference, and a stack of
 ten boxes stepped with the student's sweeps against the complementarity answer.
 
-Instructor's side only (it imports ``solutions``).  The stack runs
-:func:`grader.sandbox.scene_driver.stack_of_boxes` in the student's sandbox: a resting stack's
-contact k, counted from the bottom, carries the weight of the ``count - k`` boxes
-above it, ``(count - k) m g dt`` per step (the solution of the LCP of the book's first
-chapter); the student's impulses must reach it and the boxes stay at rest.
+Instructor's side only (it imports ``solutions``).  The stack is stepped here, in the
+trusted process, with the reference's contact solver whose row visits are the
+student's ``apply_normal_impulse`` and ``apply_friction_impulse``: each step's sweeps
+go to the student's sandbox as one program of calls (:meth:`StudentCode.run_program`)
+and their answers are wired back here, so nothing but those two functions runs on the
+student's side.  A resting stack's contact k, counted from the bottom, carries the
+weight of the ``count - k`` boxes above it, ``(count - k) m g dt`` per step (the
+solution of the LCP of the book's first chapter); the student's impulses must reach it
+and the boxes stay at rest.
 """
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from grader.harness.compare import show
 from grader.harness.credit import check_cases, fail
+from grader.harness.student_code import register
+from grader.sandbox.codec import is_number
 from grader.tests.public.test_sequential import answer_problem, describe, random_cases
+from solutions.body import Body
+from solutions.contact import Contact
+from solutions.response import contact_solver
+from solutions.response.contact_solver import ContactSolver, SolverSettings
 from solutions.solver.contact_point import apply_friction_impulse, apply_normal_impulse
 
 MODULE = "solver.contact_point"
@@ -44,20 +55,99 @@ def test_random_against_reference(student):
     against_reference(student, "apply_friction_impulse", apply_friction_impulse, random_cases(902, 40, friction=True))
 
 
+#: The program's functions (StudentCode.run_program), by index.
+NORMAL, FRICTION = 0, 1
+SWEEP_FUNCTIONS = [(MODULE, "apply_normal_impulse"), (MODULE, "apply_friction_impulse")]
+STACK = "the stack of ten boxes with your sweeps"
+
+
+def student_sweeps(student):
+    """A ``solve_constraints`` (:mod:`solutions.solver.kernel`, accumulated rigid rows,
+    friction first, no block solve) whose visits are the student's functions, run in
+    their sandbox in one round trip; which row is visited when, what each visit is
+    given and where its answer goes are decided here; the visits' answers come back
+    as the velocities and accumulated impulses after the sweeps."""
+
+    def solve_constraints(velocity, rows, iterations, normal_total, tangent_total, target, mass_scale,
+                          impulse_scale, accumulate=True, friction_first=False, use_friction=True, use_block=True):
+        if not (accumulate and friction_first and use_friction) or (use_block and np.any(rows.block)):
+            raise AssertionError("the stack scene solves accumulated rows, friction first, without block solves")
+        registers = {f"v{i}": [float(x) for x in row] for i, row in enumerate(velocity)}
+        groups = []
+        for g in range(len(rows.first)):
+            a, b = int(rows.a[g]), int(rows.b[g])
+            members = range(int(rows.first[g]), int(rows.first[g] + rows.count[g]))
+            groups.append((a, b, members))
+            for k in members:
+                registers[f"p{k}"] = [float(x) for x in (
+                    rows.nx[g], rows.ny[g], rows.rn_a[k], rows.rn_b[k], rows.rt_a[k], rows.rt_b[k], rows.ima[g],
+                    rows.imb[g], rows.iia[g], rows.iib[g], rows.mass_normal[k], rows.mass_tangent[k],
+                    rows.friction[k], rows.lower[k])]
+                registers[f"N{k}"], registers[f"T{k}"] = float(normal_total[k]), float(tangent_total[k])
+        calls = []
+        for _ in range(iterations):
+            for a, b, members in groups:
+                bodies = [register(f"v{a}"), register(f"v{b}")]
+                for k in members:
+                    if rows.friction[k] != 0.0:
+                        calls.append((FRICTION, [*bodies, register(f"p{k}"), register(f"N{k}"), register(f"T{k}")],
+                                      [f"v{a}", f"v{b}", f"T{k}"]))
+                for k in members:
+                    calls.append((NORMAL, [*bodies, register(f"p{k}"), register(f"N{k}"), float(target[k]),
+                                           float(mass_scale[k]), float(impulse_scale[k])], [f"v{a}", f"v{b}", f"N{k}"]))
+        names = [f"v{i}" for i in range(len(velocity))]
+        totals = [f"{kind}{k}" for kind in "NT" for k in range(len(normal_total))]
+        found, _ = student.run_program(SWEEP_FUNCTIONS, registers, calls, names + totals, STACK, timeout=60.0)
+        velocities = [found[name] for name in names]
+        bad = [v for v in velocities if not isinstance(v, list) or len(v) != 3 or not all(map(is_number, v))]
+        bad += [found[name] for name in totals if not is_number(found[name])]
+        if bad:
+            fail(f"{STACK}: your functions returned {show(bad[0])[:300]} where (vx, vy, w) and an accumulated impulse "
+                 "(numbers) were expected")
+        velocity[:] = np.array(velocities, dtype=float)
+        normal_total[:] = [float(found[f"N{k}"]) for k in range(len(normal_total))]
+        tangent_total[:] = [float(found[f"T{k}"]) for k in range(len(tangent_total))]
+
+    return solve_constraints
+
+
+def stack_of_boxes(steps: int, count: int, dt: float, iterations: int = 20) -> tuple[np.ndarray, np.ndarray]:
+    """``count`` 1 m, 1 kg boxes stacked on static ground, stepped with the reference's
+    contact solver (the block solver off, so that every normal impulse is a visit; the
+    sweeps are whatever :func:`contact_solver.kernel` gives).  The contacts are exact
+    (each face on the one below, depth 0).  Per step the boxes' (y, vy) and the
+    accumulated normal impulse of each contact, bottom first."""
+    ground = Body.box(10.0, 1.0, is_static=True, position=(0.0, -0.5), friction=0.6)
+    bodies = [ground] + [Body.box(1.0, 1.0, position=(0.0, 0.5 + k), friction=0.6) for k in range(count)]
+    solver = ContactSolver(SolverSettings(iterations=iterations, block_solver=False, position_correction="none",
+                                          restitution_threshold=0.0))
+    trajectory, impulses = [], []
+    for _ in range(steps):
+        for body in bodies[1:]:
+            body.velocity = body.velocity + dt * np.array([0.0, -G])
+        manifolds = []
+        for k in range(count):
+            top = float(bodies[k].position[1]) + 0.5
+            manifolds.append((k, k + 1, Contact((0.0, 1.0), 0.0, [(-0.5, top), (0.5, top)],
+                                                feature_ids=("left", "right"))))
+        solver.solve(bodies, manifolds, dt)
+        for body in bodies[1:]:
+            body.position = body.position + dt * body.velocity
+            body.angle += dt * body.angular_velocity
+        trajectory.append([[float(b.position[1]), float(b.velocity[1])] for b in bodies[1:]])
+        totals = [0.0] * count
+        for i, _, _, normal, _ in solver.contact_impulses:
+            totals[i] += float(normal)
+        impulses.append(totals)
+    return np.array(trajectory), np.array(impulses)
+
+
 @pytest.mark.points(2)
 @pytest.mark.visibility("hidden")
 @pytest.mark.title("Sequential impulses: a stack of ten boxes rests on the complementarity answer")
-def test_stack_of_ten(student):
-    result = student.sandbox.call("scene_driver", "stack_of_boxes", [STEPS, BOXES, DT], timeout=60.0)
-    data = student.value_of(result, "the stack of ten boxes with your sweeps")
-    try:
-        trajectory = np.array(data["trajectory"], dtype=float)
-        impulses = np.array(data["impulses"], dtype=float)
-    except (KeyError, TypeError, ValueError):
-        fail("the stack of ten boxes returned no trajectory and impulses")
-    if trajectory.shape != (STEPS, BOXES, 2) or impulses.shape != (STEPS, BOXES):
-        fail(f"the stack of ten boxes returned {trajectory.shape} states and {impulses.shape} impulses, "
-             f"not {(STEPS, BOXES, 2)} and {(STEPS, BOXES)}")
+def test_stack_of_ten(student, monkeypatch):
+    monkeypatch.setattr(contact_solver, "kernel", lambda backend: student_sweeps(student))
+    trajectory, impulses = stack_of_boxes(STEPS, BOXES, DT)
     if not (np.all(np.isfinite(trajectory)) and np.all(np.isfinite(impulses))):
         fail("the stack of ten boxes produced non-finite positions, velocities or impulses")
     want = np.array([(BOXES - k) * G * DT for k in range(BOXES)])       # N s per step, bottom contact first

@@ -260,9 +260,12 @@ def test_zips_without_a_manifest_are_opened_as_before(tmp_path):
     plain = tmp_path / "plain.zip"
     with zipfile.ZipFile(plain, "w") as archive:
         archive.writestr("exercises/__init__.py", b"")
-        archive.writestr("exercises/anything.bin", b"\0\1")
+        archive.writestr("exercises/notes.md", b"my notes\n")
     with opened(Submission("p", plain, "zip"), tmp_path) as folder:
-        assert verify_manifest(folder) is None and (folder / "exercises" / "anything.bin").is_file()
+        assert verify_manifest(folder) is None and (folder / "exercises" / "notes.md").is_file()
+    with zipfile.ZipFile(plain, "a") as archive:  # only source, manifest or not
+        archive.writestr("exercises/anything.bin", b"\0\1")
+    assert "'exercises/anything.bin' (not source)" in refusal(plain, tmp_path)
 
 
 # Grading -------------------------------------------------------------------------------------------

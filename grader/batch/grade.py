@@ -178,9 +178,9 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
     if jobs < 1:
         raise ValueError(f"jobs must be at least 1, got {jobs}")
     submissions = discover(paths)
-    out_dir = Path(out_dir)
     # Files with two names are graded by content and flagged, never refused (submissions.hard_links).
     linked = hard_links(submissions)
+    out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise GradingError(f"--out {out_dir} exists and is not a folder")
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -252,13 +252,13 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                         bar.update(1)
                         continue
                     todo.append(Job(len(todo), submission, submission_fingerprint, run_order(tests)))
+                    todo[-1].hard_links = linked.get(submission.id, [])
                 workers, spare = workers[:len(todo)], workers[len(todo):]
                 dismiss(spare)
                 if todo:
                     chosen = resolve_isolation(isolation, warn)
                     for job in todo:
                         job.isolation = chosen
-                    todo[-1].hard_links = linked.get(submission.id, [])
                         job.library = library_digest
                     config = {"tests": [dataclasses.asdict(t) for t in tests], "limits": dataclasses.asdict(limits),
                               "isolation": chosen, "library": None if library is None else str(Path(library).resolve())}

@@ -216,7 +216,6 @@ def exercise_modules(reference_dir: Path = REFERENCE_DIR) -> list[str]:
     return modules
 
 
-def _functions(tree: ast.Module) -> list[tuple[str, ast.FunctionDef]]:
 def package_modules(package: Path) -> list[str]:
     """Dotted names (inside the package) of every ``.py`` file of ``package``, its
     ``__init__`` files included (``broadphase.__init__``), ``__pycache__`` and links left out."""
@@ -242,6 +241,7 @@ def _module_code(tree: ast.Module) -> list[ast.stmt]:
                                                             ast.Import, ast.ImportFrom))]
 
 
+def _functions(tree: ast.Module) -> list[tuple[str, ast.FunctionDef]]:
     found = []
     for node in tree.body:
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
@@ -280,7 +280,6 @@ def read_package(package: Path | None, modules: list[str], code: Code,
                 continue  # the distributed stub, untouched
             first = min([node.lineno, *(d.lineno for d in node.decorator_list)])
             code.functions.append(Function(module, qualname, first, lines[first - 1:node.end_lineno], tokens))
-    return code
         statements = _module_code(tree)
         if statements:
             tokens: list[tuple[str, int]] = []
@@ -288,6 +287,7 @@ def read_package(package: Path | None, modules: list[str], code: Code,
             if stubs is None or [t for t, _ in tokens] != stubs.get(f"{module}.{MODULE_CODE}"):
                 first, last = statements[0].lineno, max(n.end_lineno or n.lineno for n in statements)
                 code.functions.append(Function(module, MODULE_CODE, first, lines[first - 1:last], tokens))
+    return code
 
 
 def stub_tokens(stubs_dir: Path, modules: list[str], k: int = K,

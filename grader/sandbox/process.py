@@ -176,13 +176,6 @@ def _running(pid: str) -> bool:
 
 
 def python_usable_by_anyone() -> bool:
-#: The suffixes of the files a graded package is made of: Python source and the data
-#: and notes that go with it.  Nothing else is ever copied into a sandbox: no compiled
-#: ``.pyc`` (Python would import it without its source), no extension module
-#: (``.so``), no ``.pth``, no archive to import from.
-SOURCE_SUFFIXES = (".py", ".md", ".txt", ".json")
-
-
     """True when an unprivileged user can run this Python and read its libraries."""
     paths = [Path(os.path.realpath(sys.executable)), *map(Path, python_folders())]
     for path in paths:
@@ -196,6 +189,13 @@ SOURCE_SUFFIXES = (".py", ".md", ".txt", ".json")
         if not path.stat().st_mode & stat.S_IROTH:
             return False
     return True
+
+
+#: The suffixes of the files a graded package is made of: Python source and the data
+#: and notes that go with it.  Nothing else is ever copied into a sandbox: no compiled
+#: ``.pyc`` (Python would import it without its source), no extension module
+#: (``.so``), no ``.pth``, no archive to import from.
+SOURCE_SUFFIXES = (".py", ".md", ".txt", ".json")
 
 
 def copy_package(source: Path, destination: Path) -> None:
@@ -313,11 +313,6 @@ def processes_of(uids) -> list[tuple[int, int]]:
 def stray_processes() -> list[tuple[int, int]]:
     """Processes of sandbox users that no sandbox holds: left behind (should be none)."""
     uids = range(SANDBOX_UID_BASE, SANDBOX_UID_BASE + SANDBOX_UID_COUNT)
-    withheld : dict, optional
-        ``{"module:function": reason}``: functions the trusted side found no source for
-        (still the stub; :mod:`grader.batch.source_audit`).  A call of one is answered
-        here, ``not_implemented`` with the reason, and never reaches the worker:
-        whatever the package does at run time, it earns nothing its source does not hold.
     return [(pid, uid) for pid, uid in processes_of(uids) if not uid_in_use(uid)]
 
 
@@ -333,6 +328,11 @@ class Sandbox:
         Parallel job number; each slot runs as its own unprivileged user.
     isolation : str
         ``"auto"``, ``"bwrap"`` or ``"plain"`` (see the module docstring).
+    withheld : dict, optional
+        ``{"module:function": reason}``: functions the trusted side found no source for
+        (still the stub; :mod:`grader.batch.source_audit`).  A call of one is answered
+        here, ``not_implemented`` with the reason, and never reaches the worker:
+        whatever the package does at run time, it earns nothing its source does not hold.
     """
 
     def __init__(self, package_dir: Path, limits: Limits = Limits(), slot: int = 0, isolation: str = "auto",
@@ -579,9 +579,6 @@ class Sandbox:
         as a list of argument lists and returns the list of values.
 
         The request carries a fresh random nonce; only a line echoing it (and the
-        reason = self.withheld.get(f"{module}:{function}")
-        if reason is not None:
-            return CallResult("not_implemented", message=f"not implemented yet: {function}: {reason}")
         request's id) is taken as the answer, every other line is skipped.  What this
         protects: a line written earlier or later than the answer -- by a process or
         thread the student's code left running, by code run at import time, or a
@@ -594,6 +591,9 @@ class Sandbox:
         """
         if self.broken is not None:
             raise self.broken
+        reason = self.withheld.get(f"{module}:{function}")
+        if reason is not None:
+            return CallResult("not_implemented", message=f"not implemented yet: {function}: {reason}")
         if self.process is None or self.process.poll() is not None:
             if self.process is not None:
                 self.restarts += 1

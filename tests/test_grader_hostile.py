@@ -1109,3 +1109,20 @@ def fetch(description):
         keys = 0
     return {"search": found if found > 0 else -1, "keys": keys}
 '''
+
+
+def test_a_withheld_function_is_answered_not_implemented_alone_or_in_a_program(tmp_path):
+    """Issue 24: the trusted side answers a call of a function whose source is still the
+    stub, also inside a program of calls (the scenes), without asking the worker."""
+    package = tmp_path / "exercises"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "mod.py").write_text("def answer():\n    return 42\n\ndef other():\n    return 1\n")
+    with Sandbox(package, slot=9, isolation="plain", withheld={"exercises.mod:answer": "still the stub"}) as box:
+        alone = box.call("exercises.mod", "answer", [])
+        assert alone.status == "not_implemented" and "answer: still the stub" in alone.message
+        assert box.call("exercises.mod", "other", []).value == 1
+        program = {"functions": [["exercises.mod", "other"], ["exercises.mod", "answer"]], "registers": {},
+                   "calls": [[1, [], ["x"]]], "results": ["x"]}
+        inside = box.call("", "", program=program)
+        assert inside.status == "not_implemented" and "answer: still the stub" in inside.message

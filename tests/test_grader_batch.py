@@ -28,9 +28,11 @@ from grader.errors import GradingError
 from grader.batch.grade import grade_submissions
 from grader.batch.gradebook import spec_hash, write_gradebook
 from grader.harness.outcome import Outcome
+from grader.harness.outcome import TestResult as Result
 from grader.reports import results as gs_results
 from grader.harness import run as grader_run
-from grader.reports.results import build_results, check_results, leaderboard, plain
+from grader.harness.results_model import leaderboard, plain
+from grader.reports.results import build_results, check_results
 from grader.sandbox.process import Limits
 from grader.harness.spec import VISIBILITIES
 from grader.harness.run import load_spec
@@ -331,8 +333,8 @@ def test_a_killed_batch_resumes_and_grades_each_submission_once(tmp_path):
 def test_html_reports_are_written_when_grader_report_exists(tmp_path, spec, monkeypatch):
     calls = []
 
-    def write_student_report(results_path, html_path):
-        assert json.loads(Path(results_path).read_text())["tests"]
+    def write_student_report(results, html_path):
+        assert results.tests and results.id == "lee"  # the model the grading made, not the file read back
         calls.append("student")
         Path(html_path).write_text("<html></html>")
 
@@ -526,8 +528,8 @@ def test_partial_credit_and_strict_json(spec):
 
 def test_a_wrong_answer_never_reaches_the_leaderboard(spec):
     speed = next(t for t in spec if t.leaderboard)
-    assert leaderboard([(speed, Outcome.failed("wrong", seconds=0.001))]) == []
-    assert leaderboard([(speed, Outcome.passed("ok", seconds=0.5))]) == [
+    assert leaderboard([Result(speed, Outcome.failed("wrong", seconds=0.001), 0.1)]) == []
+    assert leaderboard([Result(speed, Outcome.passed("ok", seconds=0.5), 0.6)]) == [
         {"name": speed.leaderboard, "value": 0.5, "order": "asc"}]
 
 

@@ -16,6 +16,7 @@ from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
 
+from grader.harness import results_model
 from grader.reports import results as gs_results
 from grader.cli import main as cli_main
 from grader.harness.run import load_spec
@@ -177,7 +178,7 @@ def test_a_failed_test_with_a_picture_has_html_output_with_the_png_inline():
 
 
 def test_a_picture_too_large_is_left_out_saying_so(monkeypatch):
-    monkeypatch.setattr(gs_results, "PICTURE_LIMIT", 100)
+    monkeypatch.setattr(results_model, "PICTURE_LIMIT", 100)
     entry = results_entry(spec("grid.touching", "Grid", "visible"), Outcome.failed("missed", PAIRS_FIGURE), 0.1)
     assert entry["output_format"] == "html" and "<img" not in entry["output"]
     assert "The picture of the failing case was omitted" in entry["output"] and "larger than the 0 KB" in entry["output"]

@@ -98,7 +98,7 @@ def test_class_report_histogram_most_failed_table_and_scatter(class_dir):
     order = re.findall(r"data-test='([^']+)'", table)
     assert order == ["grid.touching", "contacts.circle", "grid.speed", "sat.axes", "momentum.elastic"]
     assert "4 / 5" in table and "80%" in table  # grid.touching: failed by bob, cy, dee and gus's partial entry
-    assert "not implemented yet 1" in table and "timeout 1" in table
+    assert "not implemented yet 1" in table and "timed out 1" in table  # the words of STATUS_MEANINGS
     # Summary statistics, leaderboard, every submission, the refused and the unreadable.
     for text in ("standard deviation", "median", "6 results files", "5 graded", "1 not gradable", "1 unreadable",
                  "grid time (s)", "refused: no exercises package", "fay/results.json"):

@@ -40,7 +40,8 @@ from .gradebook import (FEEDBACK_NAME, GRADEBOOK_NAME, REPORT_NAME, FeedbackOpti
                         row_of, spec_hash, write_class_report, write_feedback, write_gradebook,
                         write_student_report)
 from ..sandbox.isolation import resolve_isolation
-from ..reports.results import RESULTS_NAME, read_results, refused_results, write_results
+from ..harness.results_model import SubmissionResults
+from ..reports.results import RESULTS_NAME, read_results, write_results
 from ..sandbox.process import Limits
 from .scheduler import Job, Worker, dismiss, run_jobs, run_order
 from ..harness.spec import TestSpec
@@ -230,24 +231,29 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                     except OSError as exc:
                         refusal = "the submission could not be read"
                         submission_fingerprint = f"unreadable:{exc.errno}"
-                    previous = read_results(results_path)
-                    meta = (previous or {}).get("extra_data") or {}
+                    # Read back only to resume: the results this run would make again.
+                    previous_data = read_results(results_path)
+                    previous = None if previous_data is None else SubmissionResults.from_json(previous_data,
+                                                                                                results_path)
+                    meta = previous.meta if previous is not None else {}
                     if (not regrade and previous is not None and meta.get("fingerprint") == submission_fingerprint
                             and meta.get("spec_hash") == digest and meta.get("library") == library_digest):
-                        rows[submission.id] = row_of(submission, "skipped", previous, out_dir)
+                        rows[submission.id] = row_of(submission, "skipped", previous_data, out_dir)
                         if html and not (results_path.parent / REPORT_NAME).exists():
-                            write_student_report(results_path, warn)
-                        write_feedback(results_path, submission.id, feedback, warn)
+                            write_student_report(results_path, warn, previous)
+                        write_feedback(results_path, submission.id, feedback, warn, previous)
                         bar.update(1)
                         continue
                     if refusal is not None:
-                        data = refused_results(tests, refusal, 0.0, submission.id, submission_fingerprint, digest)
-                        data["extra_data"]["library"] = library_digest
+                        model = SubmissionResults.refused(tests, refusal, 0.0, submission.id, submission_fingerprint,
+                                                          digest)
+                        model.meta["library"] = library_digest
+                        data = model.to_json()
                         write_results(data, results_path)
                         log_graded(out_dir, submission.id, "refused", data)
                         if html:
-                            write_student_report(results_path, warn)
-                        write_feedback(results_path, submission.id, feedback, warn)
+                            write_student_report(results_path, warn, model)
+                        write_feedback(results_path, submission.id, feedback, warn, model)
                         rows[submission.id] = row_of(submission, "refused", data, out_dir, data["output"])
                         bar.update(1)
                         continue

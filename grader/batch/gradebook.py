@@ -31,11 +31,11 @@ import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Callable
 
 from ..harness.outcome import Outcome, TestResult
-from ..reports.results import (RESULTS_NAME, build_results, read_results, refused_results, write_results,
-                      write_text_atomic)
+from ..harness.results_model import SubmissionResults, points
+from ..reports.results import RESULTS_NAME, read_results, read_submission_results, write_results, write_text_atomic
 from .scheduler import Job
 from ..harness.spec import TestSpec
 from ..harness.run import load_spec
@@ -64,12 +64,15 @@ def _report_module():
         raise
 
 
-def write_student_report(results_path: Path, warn: Callable[[str], None]) -> None:
-    """``report.html`` next to ``results.json`` (when grader.reports.instructor exists); never raises."""
+def write_student_report(results_path: Path, warn: Callable[[str], None],
+                         results: SubmissionResults | None = None) -> None:
+    """``report.html`` next to ``results.json`` (when grader.reports.instructor exists), of
+    ``results`` (else of the file read back); never raises."""
     try:
         report = _report_module()
         if report is not None:
-            report.write_student_report(results_path, results_path.parent / REPORT_NAME)
+            report.write_student_report(results if results is not None else results_path,
+                                        results_path.parent / REPORT_NAME)
     except Exception as exc:  # a report must not cost a grade
         warn(f"warning: no HTML report for {results_path.parent.name}: {type(exc).__name__}: {exc}")
 
@@ -98,8 +101,9 @@ class FeedbackOptions:
 
 
 def write_feedback(results_path: Path, submission_id: str, options: FeedbackOptions,
-                   warn: Callable[[str], None]) -> None:
-    """The student's ``feedback.html`` of one results.json (and its copy); never raises."""
+                   warn: Callable[[str], None], results: SubmissionResults | None = None) -> None:
+    """The student's ``feedback.html`` of one results.json (and its copy): of ``results``,
+    else of the file read back once; never raises."""
     if not options.wanted:
         return
     try:
@@ -113,8 +117,11 @@ def write_feedback(results_path: Path, submission_id: str, options: FeedbackOpti
                  if on}
         if not options.lower and any(page_level(target) - asked for target in targets):
             options.kept.append(submission_id)
+        if results is None:
+            results = read_submission_results(results_path)
         for target in targets:
-            write_feedback_report(results_path, target, options.after_due_date, options.published, options.lower)
+            write_feedback_report(results if results is not None else results_path, target, options.after_due_date,
+                                  options.published, options.lower)
     except Exception as exc:  # feedback must not cost a grade
         warn(f"warning: no feedback page for {submission_id}: {type(exc).__name__}: {exc}")
 
@@ -137,25 +144,28 @@ def finish_job(job: Job, elapsed: float, tests: list[TestSpec], digest: str, out
              "rerun to try again")
         return row_of(submission, "error", None, out_dir, job.error)
     if job.refused is not None:
-        data = refused_results(tests, job.refused, elapsed, submission.id, job.fingerprint, digest)
-        state = "refused"
+        model = SubmissionResults.refused(tests, job.refused, elapsed, submission.id, job.fingerprint, digest)
     else:
-        results = []
-        for index, test in enumerate(tests):
-            outcome, seconds = job.outcomes.get(index, (Outcome("not_run", message="this test did not run"), 0.0))
-            results.append(TestResult(test, outcome, seconds))
-        data = build_results(results, elapsed, submission.id, job.fingerprint, digest, job.package,
-                             job.isolation)
-        state = "graded"
+        model = SubmissionResults.graded(
+            [TestResult(test, *job.outcomes.get(index, (Outcome("not_run", message="this test did not run"), 0.0)))
+             for index, test in enumerate(tests)],
+            elapsed, submission.id, job.fingerprint, digest, job.package, job.isolation)
         if job.library_replaced:
-            data["output"] += "\n" + library_note(job.library_replaced)
-            data["extra_data"]["library_replaced"] = list(job.library_replaced)
-    data["extra_data"]["library"] = job.library
+            model.output += "\n" + library_note(job.library_replaced)
+            model.meta["library_replaced"] = list(job.library_replaced)
+        # Issue 24: what the submitted source shows, for the instructor (grader.batch.source_audit),
+        # and the files it shares with other submissions (grader.batch.submissions.hard_links).
+        flags = {**(job.source_flags or {}), **({"hard_links": list(job.hard_links)} if job.hard_links else {})}
+        if any(flags.values()):
+            model.meta["source_flags"] = flags
+    model.meta["library"] = job.library
+    state = model.state
+    data = model.to_json()
     write_results(data, results_path)
     log_graded(out_dir, submission.id, state, data)
     if html:
-        write_student_report(results_path, warn)
-    write_feedback(results_path, submission.id, feedback or FeedbackOptions(html), warn)
+        write_student_report(results_path, warn, model)
+    write_feedback(results_path, submission.id, feedback or FeedbackOptions(html), warn, model)
     return row_of(submission, state, data, out_dir, data["output"] if state == "refused" else "")
 
 
@@ -205,25 +215,23 @@ def write_gradebook(out_dir: str | os.PathLike, tests: list[TestSpec] | None = N
         data = read_results(path)
         if data is None:
             continue
-        meta = data.get("extra_data") or {}
-        scores = {}
-        for entry in data["tests"]:
-            name = (entry.get("extra_data") or {}).get("test") or entry.get("name")
-            scores[name] = entry.get("score")
-            if name not in names and name not in extra_columns:
-                extra_columns.append(name)
-        rows.append((meta.get("submission_id") or path.parent.name, data, scores, meta))
+        results = SubmissionResults.from_json(data, path)
+        scores = results.scores_by_test()
+        extra_columns += [name for name in scores if name not in names and name not in extra_columns]
+        rows.append(results)
     columns = names + sorted(extra_columns)
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(["submission", "score", "max_score", *columns, "state", "note"])
 
-    def cell(value: Any) -> str:
-        return "" if value is None else f"{value:g}" if isinstance(value, (int, float)) else str(value)
+    def cell(value: float | None) -> str:
+        return "" if value is None else points(value)
 
-    for submission, data, scores, meta in rows:
-        writer.writerow([submission, cell(data.get("score")), cell(data.get("max_score")),
-                         *(cell(scores.get(c)) for c in columns), meta.get("state", ""), meta.get("reason", "")])
+    for results in rows:
+        scores = results.scores_by_test()
+        writer.writerow([results.id, cell(results.score), cell(results.max_score),
+                         *(cell(scores.get(c)) for c in columns), results.meta.get("state", ""),
+                         results.meta.get("reason", "")])
     path = out_dir / GRADEBOOK_NAME
     write_text_atomic(path, buffer.getvalue())
     return path

@@ -8,17 +8,36 @@ from dataclasses import dataclass, field
 from .credit import partial_points
 from .spec import TestSpec
 
-#: Every status a graded test can end with, and what it means.  One table: the check
-#: table, the reports, the gradebook and results.json all read their words from here.
+@dataclass(frozen=True)
+class Status:
+    """How one status is said: ``meaning`` (a sentence; its words before the first colon
+    are the status's :attr:`word`, used in sentences, badges and results.json), ``label``
+    (the column of ``grader check``'s table), ``colour`` (an HTML badge's background, hex)
+    and ``ansi`` (the terminal's SGR colour code)."""
+
+    meaning: str
+    label: str
+    colour: str
+    ansi: str
+
+    @property
+    def word(self) -> str:
+        return self.meaning.split(":")[0]
+
+
+#: Every status a graded test can end with, and how it is said.  The one table: the check
+#: table, the reports, the feedback page, the gradebook and results.json all take their
+#: words, labels and colours from here (see :func:`status_of`).
 STATUS_MEANINGS = {
-    "passed": "passed",
-    "failed": "failed: a wrong answer",
-    "not_implemented": "not implemented yet: a stub still raises NotImplementedError",
-    "error": "raised an error: an exception in the student's code",
-    "timeout": "timed out",
-    "crashed": "crashed: the worker process died",
-    "forbidden": "forbidden: the code did something it may not do",
-    "not_run": "not run: the submission used up its time",
+    "passed": Status("passed", "PASS", "#1a7f37", "32"),
+    "failed": Status("wrong answer: a value differs from the reference's", "FAIL", "#cf222e", "31"),
+    "not_implemented": Status("not implemented yet: a stub still raises NotImplementedError", "TO DO", "#6e7781",
+                              "90"),
+    "error": Status("raised an error: an exception in the student's code", "ERROR", "#bc4c00", "33"),
+    "timeout": Status("timed out", "TIMEOUT", "#bc4c00", "33"),
+    "crashed": Status("crashed: the worker process died", "CRASHED", "#bc4c00", "33"),
+    "forbidden": Status("forbidden: the code did something it may not do", "FORBIDDEN", "#8250df", "35"),
+    "not_run": Status("not run: the submission used up its time", "NOT RUN", "#6e7781", "90"),
 }
 STATUSES = tuple(STATUS_MEANINGS)
 #: Characters of a message kept; longer ones are cut (the parent never stores more).
@@ -31,6 +50,15 @@ OUTPUT_LINES = 30
 #: Room for that marker: printed output read back from a results file is at most
 #: OUTPUT_LIMIT + OUTPUT_MARKER_ROOM characters.
 OUTPUT_MARKER_ROOM = 64
+
+
+def status_of(status: str) -> Status:
+    """How ``status`` is said; a status not in the table (a results file written by
+    something else) is said as it is written, in the colour of an error."""
+    known = STATUS_MEANINGS.get(status)
+    if known is not None:
+        return known
+    return Status(str(status).replace("_", " "), str(status).upper(), STATUS_MEANINGS["error"].colour, "0")
 
 
 def capped(text: str, limit: int) -> str:
@@ -149,11 +177,19 @@ class TestResult:
     test: TestSpec
     outcome: Outcome
     seconds: float
+    #: Read back from a results file: the points it recorded, and the text the student
+    #: read when the file does not keep the message apart (None: they follow from the
+    #: test and the outcome, as for a result made by grading).
+    recorded_score: float | None = None
+    recorded_text: str | None = None
 
     @property
     def score(self) -> float:
         """Full points for a pass; for a failure of a partial-credit test, the points
-        :func:`grader.harness.credit.partial_points` gives its share of right cases; else 0."""
+        :func:`grader.harness.credit.partial_points` gives its share of right cases; else 0.
+        A result read back from a results file has the points it recorded."""
+        if self.recorded_score is not None:
+            return self.recorded_score
         if self.outcome.status == "passed":
             return float(self.test.points)
         if self.outcome.status != "failed" or not self.test.partial_credit:

@@ -1,7 +1,8 @@
 """HTML reports for instructors: one per submission, and one for the whole class.
 
-Both read Gradescope ``results.json`` files (:mod:`grader.reports.results`) and nothing else,
-so they work on any folder of results, old or new, complete or not:
+Both are views of :class:`grader.harness.results_model.SubmissionResults`: the one the
+grading process made, or Gradescope ``results.json`` files (:mod:`grader.reports.results`)
+read back into it, so they work on any folder of results, old or new, complete or not:
 
 - :func:`write_student_report`: every test with its visibility, score, status and the
   text the student reads, the picture of each failing case, the leaderboard figures.
@@ -10,7 +11,7 @@ so they work on any folder of results, old or new, complete or not:
   test a scatter of speed (time relative to the reference engine measured in the same
   run) against error, summary figures, and the list of submissions.
 
-Pages are self-contained: styles inline in the page, figures as base64 PNG, no
+Pages are self-contained: the one style sheet inline in the page, figures as base64 PNG, no
 JavaScript and nothing fetched from elsewhere, so a report can be mailed or opened
 from a zip.  Everything read from a results file is escaped before it is written.
 A file that cannot be read, a test without a status, a metric that is missing or not
@@ -18,9 +19,6 @@ a number: each is skipped (and counted where it matters), never fatal.
 """
 from __future__ import annotations
 
-import html
-import json
-import math
 import statistics
 from collections import Counter
 from dataclasses import dataclass, field
@@ -31,25 +29,15 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from ..harness.figures import GOT_COLOR, EXPECTED_COLOR, figure_png_base64
+from ..harness.outcome import TestResult
+from ..harness.results_model import SubmissionResults, badge, escaped as _e, html_page, number_or as _number, points
+from ..harness.results_model import status_word, student_text
 from ..sandbox.isolation import isolation_words
-from .results import output_text
+from .results import read_submission_results
 
 RESULTS_NAME = "results.json"
 CLASS_REPORT_NAME = "class_report.html"
 STUDENT_REPORT_NAME = "report.html"
-#: Words for the grader's statuses (extra_data.status of a test).
-STATUS_WORDS = {
-    "passed": "passed",
-    "failed": "wrong answer",
-    "not_implemented": "not implemented yet",
-    "error": "error",
-    "timeout": "timeout",
-    "crashed": "crashed",
-    "forbidden": "forbidden",
-    "not_run": "not run",
-}
-STATUS_COLORS = {"passed": "#1a7f37", "failed": "#cf222e", "not_implemented": "#6e7781", "not_run": "#6e7781",
-                 "forbidden": "#8250df"}
 #: Error measures of speed tests, most specific first: (metric keys summed, axis label).
 ERROR_MEASURES = (
     (("missed_pairs", "extra_pairs"), "pairs missed + pairs returned but apart"),
@@ -60,143 +48,8 @@ ERROR_MEASURES = (
 #: Every point of a scatter is named when there are at most this many (failed ones always are).
 MAX_LABELLED_POINTS = 8
 
-STYLE = """
-body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; font-size: 14px; color: #1f2328;
-       max-width: 1200px; margin: 24px auto; padding: 0 16px; }
-h1 { font-size: 22px; } h2 { font-size: 18px; margin-top: 28px; border-bottom: 1px solid #d0d7de; }
-table { border-collapse: collapse; margin: 8px 0; }
-th, td { text-align: left; vertical-align: top; padding: 5px 9px; border-bottom: 1px solid #d0d7de; }
-th { background: #f6f8fa; }
-td.num, th.num { text-align: right; white-space: nowrap; }
-pre { white-space: pre-wrap; margin: 0; font-size: 12.5px; max-width: 640px; }
-code { font-size: 12px; }
-.badge { color: white; border-radius: 4px; padding: 1px 7px; font-weight: 600; white-space: nowrap; }
-.bar { display: inline-block; height: 10px; background: #cf222e; vertical-align: middle; }
-.muted { color: #6e7781; }
-.warning { color: #9a6700; font-weight: 600; }
-.stats td { border: none; padding: 2px 12px 2px 0; }
-img { max-width: 100%; }
-"""
-
-
-# Reading ------------------------------------------------------------------------------------
-@dataclass
-class ResultRow:
-    """One test of a results file, with defaults for whatever is missing."""
-
-    name: str
-    title: str
-    exercise: str
-    visibility: str
-    score: float
-    max_score: float | None
-    status: str
-    output: str
-    metrics: dict = field(default_factory=dict)
-    figure: dict | None = None
-    seconds: float | None = None
-
-    @property
-    def passed(self) -> bool:
-        return self.status == "passed"
-
-
-@dataclass
-class Submission:
-    """One results file: who, score, state and tests."""
-
-    id: str
-    path: Path
-    score: float
-    max_score: float | None
-    state: str
-    reason: str
-    output: str
-    execution_time: float | None
-    tests: list[ResultRow]
-    leaderboard: list[dict]
-    isolation: str = ""   # how the student's code was isolated (grader.sandbox.process); "" if not recorded
-
-
-def _number(value, default=None):
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return default
-    value = float(value)
-    return value if math.isfinite(value) else default
-
-
-def _dict(value) -> dict:
-    return value if isinstance(value, dict) else {}
-
-
-def read_json(path: Path) -> dict | None:
-    """The JSON object in ``path``, or None if it is missing, unreadable or not an object."""
-    try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return data if isinstance(data, dict) else None
-
-
-def read_tests(data: dict) -> list[ResultRow]:
-    """The tests of a results file, each with the grader's finer status when recorded."""
-    entries = []
-    tests = data.get("tests")
-    for number, entry in enumerate(tests if isinstance(tests, list) else [], start=1):
-        if not isinstance(entry, dict):
-            continue
-        extra = _dict(entry.get("extra_data"))
-        title = str(entry.get("name") or extra.get("test") or f"test {number}")
-        name = str(extra.get("test") or title)
-        tags = entry.get("tags") if isinstance(entry.get("tags"), list) else []
-        exercise = str(extra.get("exercise") or (tags[0] if tags else "") or name.split(".")[0])
-        score = _number(entry.get("score"), 0.0)
-        max_score = _number(entry.get("max_score"))
-        status = extra.get("status") or entry.get("status")
-        if not isinstance(status, str):
-            status = "passed" if max_score is not None and score >= max_score else "failed"
-        metrics = {k: v for k, v in _dict(extra.get("metrics")).items()}
-        figure = extra.get("figure") if isinstance(extra.get("figure"), dict) else None
-        entries.append(ResultRow(name=name, title=title, exercise=exercise,
-                                 visibility=str(entry.get("visibility") or "visible"), score=score,
-                                 max_score=max_score, status=status, output=output_text(entry),
-                                 metrics=metrics, figure=figure, seconds=_number(extra.get("seconds"))))
-    return entries
-
-
-def read_submission(path: Path) -> Submission | None:
-    """A results.json as a :class:`Submission`, or None if it is not a readable object."""
-    data = read_json(path)
-    if data is None:
-        return None
-    meta = _dict(data.get("extra_data"))
-    tests = read_tests(data)
-    score = _number(data.get("score"))
-    if score is None:
-        score = sum(t.score for t in tests)
-    max_score = _number(data.get("max_score"))
-    if max_score is None and tests and all(t.max_score is not None for t in tests):
-        max_score = sum(t.max_score for t in tests)
-    board = [e for e in data.get("leaderboard") or [] if isinstance(e, dict) and "name" in e]
-    return Submission(id=str(meta.get("submission_id") or Path(path).parent.name), path=Path(path), score=score,
-                      max_score=max_score, state=str(meta.get("state") or "graded"),
-                      reason=str(meta.get("reason") or ""), output=str(data.get("output") or ""),
-                      execution_time=_number(data.get("execution_time")), tests=tests, leaderboard=board,
-                      isolation=str(meta.get("isolation") or ""))
-
-
-# HTML helpers -------------------------------------------------------------------------------
-def _e(value) -> str:
-    return html.escape(str(value), quote=True)
-
-
-def _points(value) -> str:
-    return "–" if value is None else f"{value:g}"
-
-
-def _badge(status: str) -> str:
-    colour = STATUS_COLORS.get(status, "#bc4c00")
-    return f'<span class="badge" style="background:{colour}">{_e(STATUS_WORDS.get(status, status))}</span>'
+def passed(result: TestResult) -> bool:
+    return result.outcome.status == "passed"
 
 
 def _img(data: str, alt: str) -> str:
@@ -215,12 +68,6 @@ def _picture(figure: dict | None, alt: str) -> str:
         return f'<p class="muted">no picture ({_e(type(exc).__name__)}: {_e(exc)})</p>'
 
 
-def _page(title: str, body: list[str]) -> str:
-    return "\n".join(["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
-                      f"<title>{_e(title)}</title>", f"<style>{STYLE}</style></head><body>", *body,
-                      "</body></html>", ""])
-
-
 def _write(path: Path, text: str) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -237,13 +84,14 @@ def _new_figure(width: float = 6.4, height: float = 4.2) -> tuple[Figure, object
 
 
 # One submission -------------------------------------------------------------------------------
-def write_student_report(results_json: Path, out_html: Path, figures: dict | None = None) -> Path:
+def write_student_report(results_json: SubmissionResults | Path, out_html: Path, figures: dict | None = None) -> Path:
     """An HTML page of one submission's results.
 
     Parameters
     ----------
-    results_json : Path
-        Gradescope results file (see :mod:`grader.reports.results`).
+    results_json : SubmissionResults or Path
+        The submission's results, or its Gradescope results file to read back (see
+        :mod:`grader.reports.results`).
     out_html : Path
         Page to write (folders created).
     figures : dict, optional
@@ -255,15 +103,15 @@ def write_student_report(results_json: Path, out_html: Path, figures: dict | Non
     Path
         ``out_html``.
     """
-    results_json, out_html = Path(results_json), Path(out_html)
-    submission = read_submission(results_json)
+    out_html = Path(out_html)
+    submission = results_json if isinstance(results_json, SubmissionResults) else read_submission_results(results_json)
     figures = figures or {}
     if submission is None:
         body = ["<h1>Submission report</h1>",
                 f"<p>The results file <code>{_e(results_json)}</code> is missing or cannot be read.</p>"]
-        return _write(out_html, _page("Submission report", body))
+        return _write(out_html, html_page("Submission report", body))
     body = [f"<h1>Submission {_e(submission.id)}</h1>",
-            f"<p><b>{_points(submission.score)} / {_points(submission.max_score)} points</b>"
+            f"<p><b>{points(submission.score)} / {points(submission.max_score)} points</b>"
             + (f" &middot; graded in {submission.execution_time:.3g} s" if submission.execution_time is not None
                else "")
             + (f" &middot; state: {_e(submission.state)}" if submission.state != "graded" else "") + "</p>"]
@@ -274,9 +122,9 @@ def write_student_report(results_json: Path, out_html: Path, figures: dict | Non
     if submission.reason:
         body.append(f"<p><b>Not graded:</b> {_e(submission.reason)}</p>")
 
-    counts = Counter(t.status for t in submission.tests)
+    counts = Counter(t.outcome.status for t in submission.tests)
     if counts:
-        body.append("<p>" + ", ".join(f"{_badge(s)} {n}" for s, n in counts.most_common()) + "</p>")
+        body.append("<p>" + ", ".join(f"{badge(s)} {n}" for s, n in counts.most_common()) + "</p>")
 
     if submission.leaderboard:
         body += ["<h2>Leaderboard</h2>", "<table><tr><th>Column</th><th class='num'>Value</th><th>Order</th></tr>"]
@@ -291,17 +139,18 @@ def write_student_report(results_json: Path, out_html: Path, figures: dict | Non
              "<table><tr><th>Test</th><th>Exercise</th><th>Visibility</th><th>Result</th>"
              "<th class='num'>Points</th><th>Output</th></tr>"]
     for test in submission.tests:
-        figure = figures.get(test.name, figures.get(test.title, test.figure))
-        picture = "" if test.passed else _picture(figure, f"failing case of {test.name}")
+        spec = test.test
+        figure = figures.get(spec.name, figures.get(spec.title, test.outcome.figure))
+        picture = "" if passed(test) else _picture(figure, f"failing case of {spec.name}")
         body.append(
-            f"<tr><td>{_e(test.title)}<br><code>{_e(test.name)}</code></td><td>{_e(test.exercise)}</td>"
-            f"<td>{_e(test.visibility)}</td><td>{_badge(test.status)}</td>"
-            f"<td class='num'>{_points(test.score)} / {_points(test.max_score)}</td>"
-            f"<td><pre>{_e(test.output)}</pre>{picture}</td></tr>")
+            f"<tr><td>{_e(spec.title)}<br><code>{_e(spec.name)}</code></td><td>{_e(spec.exercise)}</td>"
+            f"<td>{_e(spec.visibility)}</td><td>{badge(test.outcome.status)}</td>"
+            f"<td class='num'>{points(test.score)} / {points(spec.points)}</td>"
+            f"<td><pre>{_e(student_text(test))}</pre>{picture}</td></tr>")
     body.append("</table>")
     if not submission.tests:
         body.append("<p class='muted'>No tests in this results file.</p>")
-    return _write(out_html, _page(f"Submission {submission.id}", body))
+    return _write(out_html, html_page(f"Submission {submission.id}", body))
 
 
 # The class ----------------------------------------------------------------------------------
@@ -324,11 +173,11 @@ class Tally:
         return self.failures / self.runs if self.runs else 0.0
 
 
-def read_class(out_dir: Path) -> tuple[list[Submission], list[Path]]:
+def read_class(out_dir: Path) -> tuple[list[SubmissionResults], list[Path]]:
     """Every readable ``*/results.json`` under ``out_dir`` (sorted), and the unreadable ones."""
     submissions, unreadable = [], []
     for path in sorted(Path(out_dir).glob(f"*/{RESULTS_NAME}")):
-        submission = read_submission(path)
+        submission = read_submission_results(path)
         if submission is None:
             unreadable.append(path)
         else:
@@ -336,7 +185,7 @@ def read_class(out_dir: Path) -> tuple[list[Submission], list[Path]]:
     return submissions, unreadable
 
 
-def tally_tests(submissions: list[Submission]) -> list[Tally]:
+def tally_tests(submissions: list[SubmissionResults]) -> list[Tally]:
     """One summary per test, most often failed first (then most failures, then name).
 
     Only graded submissions count: a refused one ran no test.
@@ -346,16 +195,17 @@ def tally_tests(submissions: list[Submission]) -> list[Tally]:
         if submission.state == "refused":
             continue
         for test in submission.tests:
-            summary = table.setdefault(test.name, Tally(test.name, test.title, test.exercise, test.visibility))
+            spec = test.test
+            summary = table.setdefault(spec.name, Tally(spec.name, spec.title, spec.exercise, spec.visibility))
             summary.runs += 1
-            summary.failures += not test.passed
+            summary.failures += not passed(test)
             summary.score_sum += test.score
-            summary.max_score = test.max_score if test.max_score is not None else summary.max_score
-            summary.statuses[test.status] += 1
+            summary.max_score = spec.points if spec.points is not None else summary.max_score
+            summary.statuses[test.outcome.status] += 1
     return sorted(table.values(), key=lambda s: (-s.failure_rate, -s.failures, s.name))
 
 
-def score_histogram(submissions: list[Submission]) -> Figure:
+def score_histogram(submissions: list[SubmissionResults]) -> Figure:
     """Histogram of the scores: points if every submission has the same maximum, else percent."""
     fig, ax = _new_figure()
     maxima = {s.max_score for s in submissions}
@@ -382,67 +232,68 @@ def score_histogram(submissions: list[Submission]) -> Figure:
     return fig
 
 
-def error_measure(tests: list[ResultRow]) -> tuple[tuple[str, ...], str] | None:
+def error_measure(tests: list[TestResult]) -> tuple[tuple[str, ...], str] | None:
     """The error measure of a speed test: the first of ERROR_MEASURES its results carry."""
     for keys, label in ERROR_MEASURES:
-        if any(all(_number(t.metrics.get(k)) is not None for k in keys) for t in tests):
+        if any(all(_number(t.outcome.metrics.get(k)) is not None for k in keys) for t in tests):
             return keys, label
     return None
 
 
-def speed_points(submissions: list[Submission]) -> dict[str, dict]:
+def speed_points(submissions: list[SubmissionResults]) -> dict[str, dict]:
     """For each speed test (its results have ``seconds`` and ``reference_seconds``):
     ``{"title", "label", "points": [(submission id, time ratio, error, passed)], "skipped"}``."""
-    timed = {t.name for s in submissions for t in s.tests
-             if "seconds" in t.metrics and "reference_seconds" in t.metrics}
-    by_test: dict[str, list[tuple[str, ResultRow]]] = {}
+    timed = {t.test.name for s in submissions for t in s.tests
+             if "seconds" in t.outcome.metrics and "reference_seconds" in t.outcome.metrics}
+    by_test: dict[str, list[tuple[str, TestResult]]] = {}
     for submission in submissions:
         for test in submission.tests:
-            if test.name in timed:
-                by_test.setdefault(test.name, []).append((submission.id, test))
+            if test.test.name in timed:
+                by_test.setdefault(test.test.name, []).append((submission.id, test))
     out = {}
     for name, runs in by_test.items():
         measure = error_measure([t for _, t in runs])
         if measure is None:
             continue
         keys, label = measure
-        points, skipped = [], 0
+        scatter, skipped = [], 0
         for submission_id, test in runs:
-            seconds = _number(test.metrics.get("seconds"))
-            reference = _number(test.metrics.get("reference_seconds"))
-            values = [_number(test.metrics.get(k)) for k in keys]
+            metrics = test.outcome.metrics
+            seconds = _number(metrics.get("seconds"))
+            reference = _number(metrics.get("reference_seconds"))
+            values = [_number(metrics.get(k)) for k in keys]
             if seconds is None or not reference or reference <= 0 or seconds <= 0 or None in values:
                 skipped += 1
                 continue
-            points.append((submission_id, seconds / reference, float(sum(values)), test.passed))
-        if points:
-            out[name] = {"title": runs[0][1].title, "label": label, "points": points, "skipped": skipped}
+            scatter.append((submission_id, seconds / reference, float(sum(values)), passed(test)))
+        if scatter:
+            out[name] = {"title": runs[0][1].test.title, "label": label, "points": scatter, "skipped": skipped}
     return out
 
 
 def speed_scatter(name: str, data: dict) -> Figure:
     """Time relative to the reference (log x) against error, one point per submission."""
     fig, ax = _new_figure()
-    points = data["points"]
+    scatter = data["points"]
     for passed, colour, marker, word in ((True, EXPECTED_COLOR, "o", "passed"), (False, GOT_COLOR, "X", "failed")):
-        chosen = [p for p in points if p[3] == passed]
+        chosen = [p for p in scatter if p[3] == passed]
         if chosen:
             ax.scatter([p[1] for p in chosen], [p[2] for p in chosen], c=colour, marker=marker, s=42,
                        label=f"{word} ({len(chosen)})", zorder=3, edgecolors="white", linewidths=0.5)
     # Name the failed submissions, and every one when there are few (names of a crowd overlap).
-    for submission_id, x, y, passed in points:
-        if not passed or len(points) <= MAX_LABELLED_POINTS:
+    for submission_id, x, y, passed in scatter:
+        if not passed or len(scatter) <= MAX_LABELLED_POINTS:
             ax.annotate(submission_id, (x, y), xytext=(4, 4), textcoords="offset points", fontsize=7, color="#444444")
     ax.axvline(1.0, color="#6e7781", linestyle="--", linewidth=1, label="reference engine", zorder=1)
     ax.set_xscale("log")
-    errors = np.array([p[2] for p in points])
+    errors = np.array([p[2] for p in scatter])
     positive = errors[errors > 0]
     if len(positive) and positive.max() / positive.min() > 100:
         ax.set_yscale("symlog", linthresh=float(positive.min()))
     else:
         top = float(errors.max()) if len(errors) and errors.max() > 0 else 1.0
         ax.set_ylim(-0.05 * top, 1.1 * top)
-    ratios = np.array([p[1] for p in points])
+    ratios = np.array([p[1] for p in scatter])
     low, high = min(ratios.min(), 1.0), max(ratios.max(), 1.0)
     ax.set_xlim(low / 1.6, high * 1.6)
     ax.set_xlabel("time / reference time (log scale; < 1 is faster than the reference)")
@@ -458,6 +309,32 @@ def _stats(values: list[float]) -> dict[str, float]:
         return {}
     return {"mean": statistics.fmean(values), "median": statistics.median(values), "min": min(values),
             "max": max(values), "standard deviation": statistics.pstdev(values)}
+
+
+# Issue 24: what the submitted source shows (grader.batch.source_audit, grader.batch.submissions.hard_links).
+def source_flags_section(submissions: list[SubmissionResults]) -> list[str]:
+    """The class report's "Source to read" section: per submission, the exercise functions
+    graded as stubs, the lines that run code the source does not show or look for the
+    grader (file:line), and the files it shares with other submissions by a hard link."""
+    # Stubs alone are unfinished work, not a reason to read: a row needs a line or a hard link.
+    flagged = [(s.id, s.meta.get("source_flags")) for s in submissions
+               if isinstance(s.meta.get("source_flags"), dict)
+               and (s.meta["source_flags"].get("lines") or s.meta["source_flags"].get("hard_links"))]
+    if not flagged:
+        return []
+    body = ["<h2 id='source-flags'>Source to read</h2>",
+            "<p>What the trusted side read in these submissions' files before grading them: a reason to read "
+            "the code, not a verdict (functions still the stub scored nothing).</p>",
+            "<table><tr><th>Submission</th><th>Still the stub</th><th>Lines</th><th>Hard links</th></tr>"]
+    for sid, flags in sorted(flagged):
+        stubs = "<br>".join(_e(str(w).split(": ")[0]) for w in flags.get("withheld") or [])
+        lines = "<br>".join(f"<code>{_e(f.get('file'))}:{_e(f.get('line'))}</code> {_e(f.get('what'))}"
+                            for f in (flags.get("lines") or [])[:40] if isinstance(f, dict))
+        links = "<br>".join(_e(str(link)) for link in flags.get("hard_links") or [])
+        body.append(f"<tr data-flagged='{_e(sid)}'><td>{_e(sid)}</td><td>{stubs or '–'}</td><td>{lines or '–'}</td>"
+                    f"<td>{links or '–'}</td></tr>")
+    body.append("</table>")
+    return body
 
 
 def write_class_report(out_dir: Path) -> Path:
@@ -505,7 +382,7 @@ def write_class_report(out_dir: Path) -> Path:
                     "<th class='num'>Failed</th><th>Failure rate</th><th class='num'>Mean points</th>"
                     "<th>Ways it failed</th></tr>")
         for s in summaries:
-            ways = ", ".join(f"{STATUS_WORDS.get(k, k)} {n}" for k, n in s.statuses.most_common() if k != "passed")
+            ways = ", ".join(f"{status_word(k)} {n}" for k, n in s.statuses.most_common() if k != "passed")
             mean = s.score_sum / s.runs if s.runs else 0.0
             body.append(
                 f"<tr data-test='{_e(s.name)}'><td>{_e(s.title)}<br><code>{_e(s.name)}</code></td>"
@@ -513,7 +390,7 @@ def write_class_report(out_dir: Path) -> Path:
                 f"<td class='num'>{s.failures} / {s.runs}</td>"
                 f"<td><span class='bar' style='width:{100 * s.failure_rate:.0f}px'></span> "
                 f"{100 * s.failure_rate:.0f}%</td>"
-                f"<td class='num'>{mean:.3g} / {_points(s.max_score)}</td><td>{_e(ways) or '–'}</td></tr>")
+                f"<td class='num'>{mean:.3g} / {points(s.max_score)}</td><td>{_e(ways) or '–'}</td></tr>")
         body.append("</table>")
     else:
         body.append("<p>No test results.</p>")
@@ -547,16 +424,17 @@ def write_class_report(out_dir: Path) -> Path:
                         + "".join(f"<tr><td class='num'>{k}</td><td>{_e(i)}</td><td class='num'>{v:.4g}</td></tr>"
                                   for k, (v, i, _) in enumerate(ranked, start=1)) + "</table>")
 
+    body += source_flags_section(submissions)
     body += ["<h2>Submissions</h2>",
              "<table><tr><th>Submission</th><th class='num'>Points</th><th>State</th><th>Report</th></tr>"]
     for s in sorted(submissions, key=lambda s: (-s.score, s.id)):
         page = s.path.parent / STUDENT_REPORT_NAME
         link = (f"<a href='{_e(page.relative_to(out_dir).as_posix())}'>report</a>" if page.is_file() else "–")
         state = s.state + (f": {s.reason}" if s.reason else "")
-        body.append(f"<tr><td>{_e(s.id)}</td><td class='num'>{_points(s.score)} / {_points(s.max_score)}</td>"
+        body.append(f"<tr><td>{_e(s.id)}</td><td class='num'>{points(s.score)} / {points(s.max_score)}</td>"
                     f"<td>{_e(state)}</td><td>{link}</td></tr>")
     body.append("</table>")
     if unreadable:
         body.append("<p><b>Unreadable results files:</b> "
                     + ", ".join(f"<code>{_e(p.relative_to(out_dir))}</code>" for p in unreadable) + "</p>")
-    return _write(out_dir / CLASS_REPORT_NAME, _page("Class report", body))
+    return _write(out_dir / CLASS_REPORT_NAME, html_page("Class report", body))

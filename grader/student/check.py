@@ -38,27 +38,16 @@ import textwrap
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..harness.outcome import STATUS_MEANINGS
+from ..harness.outcome import Outcome, TestResult, status_of
+from ..harness.results_model import STYLE_SHEET, SubmissionResults, badge, points
 from ..harness.package import COURSE_ROOT as REPO_ROOT
 from ..harness.package import PACKAGE_VARIABLE, PackageNotFound, find_package
-from ..harness.spec import EXERCISES
+from ..harness.spec import EXERCISES, TestSpec
 #: The file at the top of a student edition (written by ``grader release``).
 RELEASE_MARKER = ".course-release.json"
 #: Folder (under the system's temporary folder) where the shell command saves pictures.
 FIGURES_FOLDER = "check-figures"
 
-#: Status -> (short label, HTML badge colour, ANSI colour code).
-LABELS = {
-    "passed": ("PASS", "#1a7f37", "32"),
-    "failed": ("FAIL", "#cf222e", "31"),
-    "not_implemented": ("TO DO", "#6e7781", "90"),
-    "error": ("ERROR", "#bc4c00", "33"),
-    "timeout": ("TIMEOUT", "#bc4c00", "33"),
-    "crashed": ("CRASHED", "#bc4c00", "33"),
-    "forbidden": ("FORBIDDEN", "#8250df", "35"),
-    "not_run": ("NOT RUN", "#6e7781", "90"),
-}
-STATUS_WORDS = {status: meaning.split(":")[0] for status, meaning in STATUS_MEANINGS.items()}
 NOT_IMPLEMENTED = re.compile(r"^(?P<module>[\w.]+)\.(?P<function>\w+): not implemented yet"
                              r"(: (?P<stub>[\w.<>]+) in (?P<file>[\w./]+\.py))?$")
 
@@ -94,9 +83,17 @@ class CheckRow:
     def passed(self) -> bool:
         return self.status == "passed"
 
+    def spec(self) -> TestSpec:
+        return TestSpec(name=self.name, exercise=self.exercise, title=self.title, points=self.points,
+                        visibility="visible")
+
+    def outcome(self) -> Outcome:
+        return Outcome(self.status, message=self.message, figure=self.figure, metrics=self.metrics,
+                       output=self.output)
+
     @property
     def label(self) -> str:
-        return LABELS.get(self.status, (self.status.upper(), "", ""))[0]
+        return status_of(self.status).label
 
 
 @dataclass
@@ -130,22 +127,18 @@ class CheckReport:
 
     @property
     def counts(self) -> dict[str, int]:
-        out: dict[str, int] = {}
-        for row in self.rows:
-            out[row.status] = out.get(row.status, 0) + 1
-        return out
+        return self.submission_results().counts()
+
+    def submission_results(self) -> SubmissionResults:
+        """The rows as the grader's one result model (what the table is a view of)."""
+        results = [TestResult(row.spec(), row.outcome(), row.seconds, recorded_score=row.score) for row in self.rows]
+        return SubmissionResults(results, self.score, self.max_score)
 
     def summary(self) -> str:
         """One sentence: the points and how many tests ended which way."""
         if not self.rows:
             return "No public tests to run."
-        counts = self.counts
-        parts = [f"{n} {STATUS_WORDS.get(status, status)}" for status, n in counts.items()]
-        if self.passed:
-            head = f"all {len(self.rows)} tests passed"
-        else:
-            head = ", ".join(parts)
-        return (f"Score {_points(self.score)}/{_points(self.max_score)} points: {head}. "
+        return (f"{self.submission_results().summary()}. "
                 "These are the public tests; more tests run when your work is graded.")
 
     def text(self, color: bool = False, width: int | None = None) -> str:
@@ -167,34 +160,27 @@ class CheckReport:
         """A self-contained HTML table (inline styles, figures as inline PNG)."""
         from ..harness.figures import figure_png_base64  # deferred: matplotlib, heavy to import
 
-        cell = "text-align:left; vertical-align:top; padding:6px 10px; border-bottom:1px solid #d0d7de;"
-        out = ['<div style="font-family: system-ui, sans-serif; font-size: 14px;">',
+        out = ['<div class="report inline">', f"<style>{STYLE_SHEET}</style>",
                f"<p><b>{html.escape(self.header().strip())}</b></p>",
-               '<table style="border-collapse: collapse; margin: 0;">',
-               "<thead><tr>" + "".join(f'<th style="{cell}">{h}</th>' for h in ("Result", "Points", "Test",
-                                                                                 "What happened")) + "</tr></thead>",
+               "<table>",
+               "<thead><tr>" + "".join(f"<th>{h}</th>" for h in ("Result", "Points", "Test",
+                                                                "What happened")) + "</tr></thead>",
                "<tbody>"]
         for row in self.rows:
-            colour = LABELS.get(row.status, ("", "#6e7781", ""))[1]
-            badge = (f'<span style="background:{colour}; color:white; border-radius:4px; padding:2px 7px; '
-                     f'font-weight:600; white-space:nowrap;">{html.escape(row.label)}</span>')
             picture = ""
             if row.figure is not None and not row.passed:
                 try:
                     data = figure_png_base64(row.figure)
-                    picture = (f'<br><img alt="picture of the failing case" style="max-width:520px;" '
-                               f'src="data:image/png;base64,{data}">')
+                    picture = (f'<br><img alt="picture of the failing case" src="data:image/png;base64,{data}">')
                 except Exception as exc:  # a picture must never hide the message
                     picture = f"<br><i>(the picture could not be drawn: {html.escape(str(exc))})</i>"
             message = html.escape(student_message(row, self.show_output))
             out.append(
                 "<tr>"
-                f'<td style="{cell}">{badge}</td>'
-                f'<td style="{cell} white-space:nowrap;">{_points(row.score)} / {_points(row.points)}</td>'
-                f'<td style="{cell}">{html.escape(row.title)}<br><code style="font-size:12px;">'
-                f"{html.escape(row.name)}</code></td>"
-                f'<td style="{cell}"><pre style="white-space:pre-wrap; margin:0; font-size:13px; '
-                f'background:none;">{message}</pre>{picture}</td>'
+                f"<td>{badge(row.status, label=True)}</td>"
+                f"<td class='num'>{points(row.score)} / {points(row.points)}</td>"
+                f"<td>{html.escape(row.title)}<br><code>{html.escape(row.name)}</code></td>"
+                f"<td><pre>{message}</pre>{picture}</td>"
                 "</tr>")
         out += ["</tbody></table>", f"<p>{html.escape(self.summary())}</p>", "</div>"]
         return "\n".join(out)
@@ -208,7 +194,7 @@ class CheckReport:
 
     def __repr__(self) -> str:
         what = self.exercise or "all exercises"
-        return f"<CheckReport {what}: {_points(self.score)}/{_points(self.max_score)} points, " \
+        return f"<CheckReport {what}: {points(self.score)}/{points(self.max_score)} points, " \
                f"{sum(r.passed for r in self.rows)}/{len(self.rows)} tests passed>"
 
     def save_figures(self, folder: str | Path) -> list[Path]:
@@ -217,10 +203,6 @@ class CheckReport:
 
 
 # Helpers ------------------------------------------------------------------------------
-def _points(value: float) -> str:
-    return f"{value:g}"
-
-
 def _shown_path(path: Path) -> str:
     """The path relative to the current folder, else to the repository, else absolute:
     the same text on every machine for the repository's own packages."""
@@ -263,7 +245,7 @@ def student_message(row: CheckRow, show_output: bool = False) -> str:
                     "(it still raises NotImplementedError)")
         return message if "not implemented yet" in message else f"not implemented yet: {message}"
     if not message:
-        message = STATUS_WORDS.get(row.status, row.status)
+        message = status_of(row.status).word
     if row.output.strip() and (show_output or not row.passed):
         message += "\nyour code printed:\n" + row.output.rstrip()
     return message
@@ -273,10 +255,10 @@ def format_row(row: CheckRow, color: bool = False, width: int = 100, show_output
     """One test as a block of plain text: label, points, title, then the message (see
     :func:`student_message` for ``show_output``)."""
     label = row.label
-    ansi = LABELS.get(row.status, ("", "", "0"))[2]
+    ansi = status_of(row.status).ansi
     shown_label = f"\033[1;{ansi}m{label:<9}\033[0m" if color else f"{label:<9}"
-    points = f"{_points(row.score)}/{_points(row.points)}"
-    lines = [f"{shown_label} {points:>7}  {row.title}  [{row.name}]"]
+    earned = f"{points(row.score)}/{points(row.points)}"
+    lines = [f"{shown_label} {earned:>7}  {row.title}  [{row.name}]"]
     indent = " " * 19
     body = student_message(row, show_output).splitlines() or [""]
     for line in body:

@@ -1,0 +1,94 @@
+"""One result vocabulary: the grader says a status, writes points and styles a page one
+way, from grader/harness/outcome.py (STATUS_MEANINGS) and grader/harness/results_model.py
+(points, STYLE_SHEET).  These tests read grader/'s sources and fail when a second status
+table, style sheet or points formatter appears elsewhere."""
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+from grader.harness.outcome import STATUS_MEANINGS, STATUSES, status_of
+from grader.harness.results_model import (STYLE_SHEET, SubmissionResults, badge, html_page, points, status_word)
+
+GRADER = Path(__file__).resolve().parent.parent / "grader"
+VOCABULARY = {GRADER / "harness" / "outcome.py"}
+STYLE_HOME = GRADER / "harness" / "results_model.py"
+CSS_RULE = re.compile(r"[\w.#\]]\s*\{[^{}]*\b[a-z-]+\s*:\s*[^;{}]+;")
+
+
+def sources() -> list[tuple[Path, ast.AST]]:
+    return [(path, ast.parse(path.read_text(encoding="utf-8"))) for path in sorted(GRADER.rglob("*.py"))]
+
+
+def test_no_second_status_table():
+    """A dict keyed by three or more of the statuses, and by nothing else, is a table of them:
+    only outcome.py has one.  (A table keyed by the worker's call statuses, some of which
+    share a name, translates those: its keys are not all the grader's statuses.)"""
+    found = []
+    for path, tree in sources():
+        if path in VOCABULARY:
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Dict):
+                keys = {k.value for k in node.keys if isinstance(k, ast.Constant) and isinstance(k.value, str)}
+                if len(keys) >= 3 and keys <= set(STATUSES):
+                    found.append(f"{path.relative_to(GRADER)}:{node.lineno}")
+    assert not found, f"status tables outside grader/harness/outcome.py (use STATUS_MEANINGS): {found}"
+
+
+def test_no_second_style_sheet():
+    """CSS rules (``selector { property: value; }``) live in STYLE_SHEET only; a page puts
+    that sheet in its ``<style>`` element."""
+    found = []
+    for path, tree in sources():
+        if path == STYLE_HOME:
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and CSS_RULE.search(node.value):
+                found.append(f"{path.relative_to(GRADER)}:{node.lineno}")
+    assert not found, f"style sheets outside grader/harness/results_model.py (use STYLE_SHEET): {found}"
+
+
+def test_no_second_points_formatter():
+    """No function named for points (``_points``, ``format_points``...) but results_model.points."""
+    found = []
+    for path, tree in sources():
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name.strip("_") in (
+                    "points", "format_points", "fmt_points", "show_points") and path != STYLE_HOME:
+                found.append(f"{path.relative_to(GRADER)}:{node.lineno} {node.name}")
+    assert not found, f"points formatters outside grader/harness/results_model.py (use points): {found}"
+
+
+def test_every_status_has_words_a_label_and_a_colour():
+    for status in STATUSES:
+        said = status_of(status)
+        assert said.word and said.label and said.colour.startswith("#") and said.ansi.isdigit(), status
+    assert len({s.label for s in STATUS_MEANINGS.values()}) == len(STATUSES)  # labels tell statuses apart
+    assert status_word("failed", 1.0, 2.0) == "partly right" and status_word("failed", 0.0, 2.0) == "wrong answer"
+    assert status_of("made_up").word == "made up"  # a status from elsewhere is said as written
+    assert points(1.5) == "1.5" and points(2.0) == "2" and points(None) == "–"
+
+
+def test_pages_and_badges_use_the_one_style_sheet():
+    page = html_page("t", [badge("timeout")])
+    assert STYLE_SHEET in page and '<body class="report">' in page
+    assert STATUS_MEANINGS["timeout"].colour in page and "Timed out" in page
+
+
+def test_results_json_round_trips_through_the_model():
+    """from_json(to_json()) gives back what the views read: statuses, points, messages."""
+    from grader.harness.outcome import Outcome, TestResult
+    from grader.harness.spec import TestSpec
+
+    tests = [TestSpec("grid.a", "grid", "A", 2.0, "visible"), TestSpec("grid.b", "grid", "B", 3.0, "hidden",
+                                                                       partial_credit=True)]
+    made = SubmissionResults.graded([TestResult(tests[0], Outcome.passed(), 0.1),
+                                     TestResult(tests[1], Outcome.failed("off by one", fraction=0.95), 0.2)],
+                                    1.0, "ada")
+    back = SubmissionResults.from_json(made.to_json())
+    assert (back.id, back.score, back.max_score) == ("ada", made.score, 5.0)
+    assert [(r.test.name, r.outcome.status, r.score, r.outcome.message, r.test.visibility) for r in back.tests] == \
+        [(r.test.name, r.outcome.status, r.score, r.outcome.message, r.test.visibility) for r in made.tests]
+    assert 0 < back.tests[1].score < 3.0 and back.summary() == made.summary()

@@ -57,6 +57,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..harness.results_model import STYLE_SHEET
 from ..reports.results import write_text_atomic
 from .submissions import (SubmissionPathError, SubmissionRefused, discover, submitted_package, opened)
 
@@ -382,19 +383,6 @@ def _pair_section(number: int, pair: Pair) -> str:
     return "\n".join(parts)
 
 
-STYLE = """
-body { font-family: system-ui, sans-serif; margin: 2em; color: #222; }
-table { border-collapse: collapse; }
-th, td { border: 1px solid #ccc; padding: 0.3em 0.6em; text-align: left; vertical-align: top; }
-td.code { width: 50%; }
-pre { margin: 0; font-size: 0.85em; white-space: pre-wrap; }
-mark { background: #ffe08a; }
-.n { color: #999; }
-.where { font-weight: bold; font-size: 0.85em; margin-bottom: 0.3em; }
-table.side { width: 100%; table-layout: fixed; margin-bottom: 2em; }
-"""
-
-
 def write_report(out_dir: Path, codes: list[Code], pairs: list[Pair], threshold: float, min_shared: int,
                  k: int, window: int) -> tuple[Path, Path]:
     """``similarity.csv`` (every pair) and ``similarity.html`` (the flagged ones), atomically."""
@@ -422,8 +410,8 @@ def write_report(out_dir: Path, codes: list[Code], pairs: list[Pair], threshold:
     more = (f"<p>{len(flags) - DETAILED_PAIRS} more flagged pairs are listed above but not shown side by side.</p>"
             if len(flags) > DETAILED_PAIRS else "")
     page = f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>Similar submissions</title><style>{STYLE}</style></head>
-<body>
+<html lang="en"><head><meta charset="utf-8"><title>Similar submissions</title><style>{STYLE_SHEET}</style></head>
+<body class="report">
 <h1>Similar submissions</h1>
 <p>{len(codes)} submissions{' and the reference' if any(c.id == REFERENCE_ID for c in codes) else ''},
 {len(pairs)} pairs compared, <strong>{len(flags)} flagged</strong> (similarity at least {threshold:.0%} and at

@@ -196,7 +196,8 @@ def test_headers_say_what_the_file_is_and_how_to_check_it(generated):
             assert head.startswith("# Library file of the collision course (you do not need to edit it)"), name
     two = files["narrowphase/polygon_polygon.py"]
     assert "`grader check sat` (polygons_overlap, obbs_overlap)" in two
-    assert "`grader check contacts` (clip_segment_to_half_plane" in " ".join(two.replace("\n# ", " ").split())
+    assert ("`grader check contacts` (max_face_separation, reference_face_candidates, clip_segment_to_half_plane"
+            in " ".join(two.replace("\n# ", " ").split()))
 
 
 def test_a_stub_outside_the_table_points_at_every_exercise():

@@ -12,15 +12,15 @@ above the reference face, with its signed ``separation`` (m, > 0 apart, <= 0
 overlapping); the solver lets a point with separation ``s > 0`` close at ``s / h``
 and no faster, so a speculative point never pulls.
 
-The reference and incident faces follow
-:func:`~exercises.narrowphase.polygon_polygon.collide_polygon_polygon` (the same
-helpers and tolerances) and the clipping is its own,
+The reference face is chosen as
+:func:`~exercises.narrowphase.polygon_polygon.collide_polygon_polygon` chooses it, by
+:func:`~exercises.narrowphase.polygon_polygon.reference_face_candidates` (with
+``margin``), and the clipping is its own,
 :func:`~exercises.narrowphase.polygon_polygon.reference_face_manifold`, with points
-kept up to ``margin`` above the reference face instead of 0.  One difference: A
-keeps the reference role unless B's face is clearly better, without
-``collide_polygon_polygon``'s second look when A's manifold misses B's deepest vertex
-(a deep-overlap case, about 2 % of random overlapping pairs; moving B by
-``depth * normal`` still separates them).  Circles are not handled here: the soft
+kept up to ``margin`` above the reference face instead of 0.  One difference: the
+first candidate is used, without ``collide_polygon_polygon``'s second look when A's
+manifold misses B's deepest vertex (a deep-overlap case, about 2 % of random
+overlapping pairs; moving B by ``depth * normal`` still separates them).  Circles are not handled here: the soft
 step uses the exact contact for them.
 Normal from A to B, SI units.
 """
@@ -30,8 +30,7 @@ import numpy as np
 
 from ..contact import Contact
 from ..shapes import AABB, OBB, ConvexPolygon
-from .polygon_polygon import (REFERENCE_FACE_ABSOLUTE_TOL, REFERENCE_FACE_RELATIVE_TOL, max_face_separation,
-                              polygon_faces, reference_face_manifold, tolerance_scale)
+from .polygon_polygon import polygon_faces, reference_face_candidates, reference_face_manifold, tolerance_scale
 
 #: Box2D's speculative distance, 4 times its linear slop of 5 mm (m).
 SPECULATIVE_MARGIN = 0.02
@@ -71,19 +70,11 @@ def speculative_polygon_manifold(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | 
     if not margin >= 0.0:
         raise ValueError(f"margin must be >= 0 m, got {margin}")
     polygon_a, polygon_b = polygon_faces(a), polygon_faces(b)
-    separation_a, face_a = max_face_separation(*polygon_a, polygon_b[0])
-    if separation_a > margin:
-        return None
-    separation_b, face_b = max_face_separation(*polygon_b, polygon_a[0])
-    if separation_b > margin:
-        return None
+    candidates = reference_face_candidates(polygon_a, polygon_b, margin)
+    if not candidates:
+        return None  # a face separates the shapes by more than the margin
+    ref_name, _, face, (ref_vertices, ref_normals, ref_faces), incident = candidates[0]
     scale = tolerance_scale(polygon_a[0], polygon_b[0])      # for the rounding tolerances
-    b_clearly_better = separation_b > (separation_a + REFERENCE_FACE_RELATIVE_TOL * abs(separation_a)
-                                       + REFERENCE_FACE_ABSOLUTE_TOL * scale)
-    if b_clearly_better:
-        ref_name, face, (ref_vertices, ref_normals, ref_faces), incident = "B", face_b, polygon_b, polygon_a
-    else:
-        ref_name, face, (ref_vertices, ref_normals, ref_faces), incident = "A", face_a, polygon_a, polygon_b
     n = ref_normals[int(np.flatnonzero(ref_faces == face)[0])]
     points, depths, ids = reference_face_manifold(ref_vertices, n, face, *incident, ref_name, scale, margin)
     if not points:

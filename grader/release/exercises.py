@@ -81,6 +81,8 @@ EXERCISES: dict[str, str | dict[str, str]] = {
     "narrowphase/circle_circle.py": {"circles_overlap": "sat", "collide_circle_circle": "contacts"},
     "narrowphase/circle_polygon.py": {"circle_polygon_overlap": "sat", "collide_circle_polygon": "contacts"},
     "narrowphase/polygon_polygon.py": {"polygons_overlap": "sat", "obbs_overlap": "sat",
+                                       "max_face_separation": "contacts",
+                                       "reference_face_candidates": "contacts",
                                        "clip_segment_to_half_plane": "contacts",
                                        "reference_face_manifold": "contacts",
                                        "collide_polygon_polygon": "contacts"},

@@ -17,7 +17,8 @@ Contact generation (the box2d-lite recipe):
 2. *Reference face* = the face of largest separation (least penetration).  A keeps the
    role unless B's best face is clearly better (:data:`REFERENCE_FACE_RELATIVE_TOL`),
    so two nearly equal candidates do not swap from one step to the next, and unless
-   A's manifold (steps 3-4) loses B's deepest vertex: then B's face is used.
+   A's manifold (steps 3-4) loses B's deepest vertex: then B's face is used
+   (:func:`reference_face_candidates` lists the faces to try, in order).
 3. *Incident face* = the face of the other polygon whose normal is most anti-parallel
    to the reference normal.
 4. *Clipping* (Sutherland-Hodgman): cut the incident face by the two side planes of
@@ -29,9 +30,11 @@ the reference face; its depth is the distance between the two.  The normal point
 A to B: the reference normal if A holds the reference face, its opposite otherwise.
 
 Scaffolding left readable for students (not exercises): :func:`polygon_faces`,
-:func:`max_face_separation`, :func:`incident_face`.  Exercises: :func:`polygons_overlap`,
-:func:`obbs_overlap`, :func:`clip_segment_to_half_plane`, :func:`reference_face_manifold`,
-:func:`collide_polygon_polygon`.
+:func:`incident_face`.  Exercises: :func:`polygons_overlap`, :func:`obbs_overlap`,
+:func:`max_face_separation`, :func:`reference_face_candidates`,
+:func:`clip_segment_to_half_plane`, :func:`reference_face_manifold`,
+:func:`collide_polygon_polygon`.  The soft step's speculative manifold
+(:mod:`.speculative`) chooses its reference face with :func:`reference_face_candidates` too.
 """
 from __future__ import annotations
 
@@ -117,34 +120,6 @@ def polygon_faces(shape: AABB | OBB | ConvexPolygon) -> tuple[np.ndarray, np.nda
     return vertices, edge_normals(vertices), nonzero_edges(vertices)  # same edges, same order
 
 
-def max_face_separation(ref_vertices: np.ndarray, ref_normals: np.ndarray, ref_faces: np.ndarray,
-                        other_vertices: np.ndarray) -> tuple[float, int]:
-    """Largest face separation of ``other`` against the faces of the reference polygon.
-
-    ``s_i = min_j Dot(n_i, w_j - v_i)``: how far the other polygon's deepest vertex
-    ``w_j`` lies outside face ``i`` (m; negative = inside, i.e. penetrating).
-
-    Returns
-    -------
-    separation : float
-        ``max_i s_i`` (m).  > 0 means face ``i`` separates the polygons.
-    face : int
-        Index of that face (the first one on an exact tie).
-
-    Examples
-    --------
-    >>> square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
-    >>> normals = np.array([[0.0, -1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0]])
-    >>> max_face_separation(square, normals, np.arange(4), square + [0.75, 0.5])
-    (-0.25, 1)
-    """
-    starts = ref_vertices[ref_faces]                                  # v_i, (k, 2)
-    offsets = other_vertices[None, :, :] - starts[:, None, :]          # w_j - v_i, (k, m, 2)
-    separations = np.einsum("kmd,kd->km", offsets, ref_normals).min(axis=1)
-    best = int(np.argmax(separations))
-    return float(separations[best]), int(ref_faces[best])
-
-
 def incident_face(normals: np.ndarray, faces: np.ndarray, reference_normal: np.ndarray) -> int:
     """Index of the face whose normal is most anti-parallel to ``reference_normal``.
 
@@ -228,6 +203,99 @@ def obbs_overlap(a: OBB | AABB, b: OBB | AABB) -> bool:
     ### END SOLUTION
 
 
+def max_face_separation(ref_vertices: np.ndarray, ref_normals: np.ndarray, ref_faces: np.ndarray,
+                        other_vertices: np.ndarray) -> tuple[float, int]:
+    """Largest face separation of ``other`` against the faces of the reference polygon.
+
+    ``s_i = min_j Dot(n_i, w_j - v_i)``: how far the other polygon's deepest vertex
+    ``w_j`` lies outside face ``i`` (m; negative = inside, i.e. penetrating).
+
+    Returns
+    -------
+    separation : float
+        ``max_i s_i`` (m).  > 0 means face ``i`` separates the polygons.
+    face : int
+        Index of that face (the first one on an exact tie).
+
+    Examples
+    --------
+    >>> square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    >>> normals = np.array([[0.0, -1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0]])
+    >>> max_face_separation(square, normals, np.arange(4), square + [0.75, 0.5])
+    (-0.25, 1)
+    """
+    ### BEGIN SOLUTION
+    starts = ref_vertices[ref_faces]                                  # v_i, (k, 2)
+    offsets = other_vertices[None, :, :] - starts[:, None, :]          # w_j - v_i, (k, m, 2)
+    separations = np.einsum("kmd,kd->km", offsets, ref_normals).min(axis=1)
+    best = int(np.argmax(separations))
+    return float(separations[best]), int(ref_faces[best])
+    ### END SOLUTION
+
+
+def reference_face_candidates(polygon_a: tuple, polygon_b: tuple, margin: float = 0.0) -> list[tuple]:
+    """Steps 1 and 2 of the module docstring: the faces to try as the reference face, in order.
+
+    The best face of A (separation ``s_a``, :func:`max_face_separation` of B's vertices)
+    and the best face of B (``s_b``, of A's vertices).  If either separates the shapes by
+    more than ``margin`` there is no contact: ``[]``.  Otherwise A keeps the reference
+    role unless B's face is *clearly better*, ``s_b > s_a + REFERENCE_FACE_RELATIVE_TOL *
+    |s_a| + REFERENCE_FACE_ABSOLUTE_TOL * tolerance_scale(vertices_a, vertices_b)``:
+
+    - B clearly better: ``[B's]``;
+    - B better, but not clearly (``s_b > s_a``): ``[A's, B's]``; :func:`collide_polygon_polygon`
+      falls back to B's face when A's manifold misses B's deepest vertex;
+    - otherwise (an exact tie included): ``[A's]``.
+
+    :func:`collide_polygon_polygon` (``margin`` 0) and the soft step's speculative manifold
+    (:func:`~solutions.narrowphase.speculative.speculative_polygon_manifold`, which takes
+    the first candidate) both choose their reference face here.
+
+    Parameters
+    ----------
+    polygon_a, polygon_b : tuple
+        ``(vertices, normals, faces)`` of A and B, as returned by :func:`polygon_faces`.
+    margin : float, optional
+        Largest separation (m, >= 0) of shapes that still get candidates.
+
+    Returns
+    -------
+    list of tuple
+        Each candidate ``(ref_name, separation, face, reference_polygon, incident_polygon)``:
+        ``"A"`` or ``"B"``, its separation (m), the face's index, then the
+        ``(vertices, normals, faces)`` of the polygon holding the face and of the other one.
+
+    Examples
+    --------
+    >>> ground, crate = polygon_faces(AABB((-5.0, -1.0), (5.0, 0.0))), polygon_faces(AABB((-0.5, -0.1), (0.5, 0.9)))
+    >>> [(name, round(separation, 12), face) for name, separation, face, _, _ in reference_face_candidates(ground, crate)]
+    [('A', -0.1, 2)]
+    >>> reference_face_candidates(ground, polygon_faces(AABB((-0.5, 0.01), (0.5, 1.0))))
+    []
+    >>> [name for name, *_ in reference_face_candidates(ground, polygon_faces(AABB((-0.5, 0.01), (0.5, 1.0))),
+    ...                                                 margin=0.02)]
+    ['A']
+    """
+    ### BEGIN SOLUTION
+    separation_a, face_a = max_face_separation(*polygon_a, polygon_b[0])
+    if separation_a > margin:
+        return []  # a face of A separates the shapes
+    separation_b, face_b = max_face_separation(*polygon_b, polygon_a[0])
+    if separation_b > margin:
+        return []
+    scale = tolerance_scale(polygon_a[0], polygon_b[0])      # for the rounding of a separation
+    from_a = ("A", separation_a, face_a, polygon_a, polygon_b)
+    from_b = ("B", separation_b, face_b, polygon_b, polygon_a)
+    b_clearly_better = separation_b > (separation_a + REFERENCE_FACE_RELATIVE_TOL * abs(separation_a)
+                                       + REFERENCE_FACE_ABSOLUTE_TOL * scale)
+    if b_clearly_better:
+        return [from_b]
+    if separation_b > separation_a:
+        return [from_a, from_b]
+    return [from_a]
+    ### END SOLUTION
+
+
 def clip_segment_to_half_plane(points: list, plane_normal: np.ndarray, plane_offset: float,
                                tolerance: float = 0.0) -> list:
     """One Sutherland-Hodgman step: the part of a segment where ``Dot(n, x) <= offset``.
@@ -304,7 +372,9 @@ def reference_face_manifold(ref_vertices: np.ndarray, ref_normal: np.ndarray, re
     Returns
     -------
     points : list of numpy.ndarray
-        0, 1 or 2 contact points (m).
+        0, 1 or 2 contact points (m), never the same point twice: when the two clipped
+        points coincide (up to the rounding tolerance), as a zero-size incident face's
+        do, the first is kept.
     depths : list of float
         Depth of each point below the reference face (m, may be -0 when touching;
         down to ``-margin`` for a point above it).
@@ -398,27 +468,13 @@ def collide_polygon_polygon(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | Conve
     """
     ### BEGIN SOLUTION
     polygon_a, polygon_b = polygon_faces(a), polygon_faces(b)     # (vertices, normals, faces)
-    separation_a, face_a = max_face_separation(*polygon_a, polygon_b[0])
-    if separation_a > 0.0:
-        return None  # a face of A separates the shapes
-    separation_b, face_b = max_face_separation(*polygon_b, polygon_a[0])
-    if separation_b > 0.0:
-        return None
+    candidates = reference_face_candidates(polygon_a, polygon_b)
+    if not candidates:
+        return None  # a face separates the shapes
 
     scale = tolerance_scale(polygon_a[0], polygon_b[0])      # for the rounding tolerances
-    from_a = ("A", separation_a, face_a, polygon_a, polygon_b)
-    from_b = ("B", separation_b, face_b, polygon_b, polygon_a)
-    # Prefer A: B takes the reference role only if its face is clearly better, or if
-    # A's side planes cut off B's deepest vertex (the manifold would leave the deepest
-    # part of the overlap without a contact point).
-    b_clearly_better = separation_b > (separation_a + REFERENCE_FACE_RELATIVE_TOL * abs(separation_a)
-                                       + REFERENCE_FACE_ABSOLUTE_TOL * scale)
-    if b_clearly_better:
-        candidates = [from_b]
-    elif separation_b > separation_a:
-        candidates = [from_a, from_b]
-    else:
-        candidates = [from_a]
+    # The next candidate (B's face) only if A's side planes cut off B's deepest vertex (the
+    # manifold would leave the deepest part of the overlap without a contact point).
     for ref_name, separation, face, (ref_vertices, ref_normals, ref_faces), incident in candidates:
         ref_normal = ref_normals[int(np.flatnonzero(ref_faces == face)[0])]
         points, depths, ids = reference_face_manifold(ref_vertices, ref_normal, face, *incident, ref_name, scale)

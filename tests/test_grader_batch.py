@@ -514,9 +514,9 @@ def test_partial_credit_and_strict_json(spec):
     strict = next(t for t in spec if not t.partial_credit and t.points >= 2)
     outcome = Outcome.failed("expected [0, 1], got [0, -1]", fraction=0.95, seconds=float("nan"), missed_pairs=2)
     entry = gs_results.results_entry(partial, outcome, 0.1)
-    # 95 % right cases: half the points at 90 %, rising linearly towards full points at 100 %.
-    assert entry["score"] == pytest.approx(partial.points * 0.75) and entry["status"] == "failed"
-    assert entry["output"].startswith(f"Partly right: {partial.points * 0.75:g} / {partial.points:g} points")
+    # 95 % right cases: a quarter of the points at 90 %, rising linearly to half at 100 % (never more).
+    assert entry["score"] == pytest.approx(partial.points * 0.375) and entry["status"] == "failed"
+    assert entry["output"].startswith(f"Partly right: {partial.points * 0.375:g} / {partial.points:g} points")
     assert "expected [0, 1], got [0, -1]" in entry["output"]
     assert entry["extra_data"]["metrics"]["seconds"] is None
     json.dumps(entry, allow_nan=False)

@@ -336,7 +336,7 @@ def test_the_cases_are_all_there_and_distinct():
                  "segfault", "monkeypatch", "lying-objects", "import-reference", "import-by-path", "read-hidden",
                  "write-results", "write-outside", "leave-process", "dotdot", "absolute", "symlink", "zip-bomb",
                  "copy-of-reference", "keyring-store", "keyring-fetch", "memfd", "disk-filler", "fork-memory",
-                 "huge-contact", "huge-message", "huge-trajectory", "link-exercises", "link-to-friend-folder",
+                 "huge-contact", "huge-message", "driver-swap", "link-exercises", "link-to-friend-folder",
                  "link-to-friend-zip", "link-as-submission", "sparse-file", "many-files", "sealed-payload",
                  "huge-integer", "sourceless-bytecode", "zip-import-in-notes"):
         assert word in covered, word

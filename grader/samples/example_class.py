@@ -869,23 +869,10 @@ NORMAL_NOT_FLIPPED = BuggySample(
     replacements=(Replacement("narrowphase.polygon_polygon", "collide_polygon_polygon", '''
         def collide_polygon_polygon(a: AABB | OBB | ConvexPolygon, b: AABB | OBB | ConvexPolygon) -> Contact | None:
             polygon_a, polygon_b = polygon_faces(a), polygon_faces(b)
-            separation_a, face_a = max_face_separation(*polygon_a, polygon_b[0])
-            if separation_a > 0.0:
+            candidates = reference_face_candidates(polygon_a, polygon_b)
+            if not candidates:
                 return None
-            separation_b, face_b = max_face_separation(*polygon_b, polygon_a[0])
-            if separation_b > 0.0:
-                return None
-            scale = max(float(np.max(np.abs(polygon_a[0]))), float(np.max(np.abs(polygon_b[0]))))
-            from_a = ("A", separation_a, face_a, polygon_a, polygon_b)
-            from_b = ("B", separation_b, face_b, polygon_b, polygon_a)
-            b_clearly_better = separation_b > (separation_a + REFERENCE_FACE_RELATIVE_TOL * abs(separation_a)
-                                               + REFERENCE_FACE_ABSOLUTE_TOL * scale)
-            if b_clearly_better:
-                candidates = [from_b]
-            elif separation_b > separation_a:
-                candidates = [from_a, from_b]
-            else:
-                candidates = [from_a]
+            scale = tolerance_scale(polygon_a[0], polygon_b[0])
             for ref_name, separation, face, (ref_vertices, ref_normals, ref_faces), incident in candidates:
                 ref_normal = ref_normals[int(np.flatnonzero(ref_faces == face)[0])]
                 points, depths, ids = reference_face_manifold(ref_vertices, ref_normal, face, *incident, ref_name,

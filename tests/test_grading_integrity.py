@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from grader.harness.run import load_spec, run_tests
-from grader.samples.example_class import SOLUTIONS_DIR, BuggySample, Replacement, build_buggy_sample
+from grader.samples.example_class import EXERCISES_DIR, SOLUTIONS_DIR, BuggySample, Replacement, build_buggy_sample
 
 
 def sandbox_slot() -> int:
@@ -22,11 +22,12 @@ def sandbox_slot() -> int:
     return 30 + int(worker[2:]) if worker[2:].isdigit() else 30
 
 
-def graded(tmp_path: Path, replacements: tuple[Replacement, ...], names: set[str]) -> dict:
-    """Results by test name of the tests ``names`` on the reference with ``replacements``."""
+def graded(tmp_path: Path, replacements: tuple[Replacement, ...], names: set[str], base: Path = SOLUTIONS_DIR) -> dict:
+    """Results by test name of the tests ``names`` on ``base`` (the reference, or the stubs
+    a student starts from: EXERCISES_DIR) with ``replacements``."""
     sample = BuggySample(name="integrity", mistake="a shortcut", erratum=0, replacements=replacements,
                          expected_failures=frozenset())
-    folder = build_buggy_sample(sample, tmp_path, SOLUTIONS_DIR)
+    folder = build_buggy_sample(sample, tmp_path, base)
     tests = [t for t in load_spec() if t.name in names]
     assert {t.name for t in tests} == names, "a test named here is not in the spec"
     return {r.test.name: r for r in run_tests(folder, tests, slot=sandbox_slot())}
@@ -101,3 +102,79 @@ def test_the_reference_broad_phases_pass_the_algorithm_checks(tmp_path):
     results = graded(tmp_path, (), broadphase_tests("grid.", hidden=False) | broadphase_tests("quadtree.", False))
     failed = {name: r.outcome.message[:300] for name, r in results.items() if r.outcome.status != "passed"}
     assert not failed, failed
+
+
+#: polygons_overlap in two lines from the helpers of polygon_polygon.py: every face of A,
+#: then of B, has the other polygon inside its line.  On main the helpers were library code
+#: and a stubs submission with this function earned every polygon SAT point.
+SAT_FROM_FACE_SEPARATIONS = (Replacement("narrowphase.polygon_polygon", "polygons_overlap", '''
+    def polygons_overlap(a, b) -> bool:
+        polygon_a, polygon_b = polygon_faces(a), polygon_faces(b)
+        return max_face_separation(*polygon_a, polygon_b[0])[0] <= 0 and max_face_separation(*polygon_b, polygon_a[0])[0] <= 0
+    '''),)
+#: The public tests that call polygons_overlap and nothing else of the student's.
+POLYGON_SAT_TESTS = {"sat.polygons_overlap_random", "sat.far_from_origin"}
+
+
+def test_the_face_separations_are_an_exercise_not_a_library_shortcut_to_polygon_sat(tmp_path):
+    on_stubs = graded(tmp_path / "stubs", SAT_FROM_FACE_SEPARATIONS, POLYGON_SAT_TESTS, base=EXERCISES_DIR)
+    for name, result in on_stubs.items():
+        assert result.score == 0, (name, result.outcome.message[:500])
+        assert "max_face_separation" in result.outcome.message, (name, result.outcome.message[:500])
+    # The same two lines are right once max_face_separation is written (the reference's).
+    on_reference = graded(tmp_path / "reference", SAT_FROM_FACE_SEPARATIONS, POLYGON_SAT_TESTS)
+    assert all(r.outcome.status == "passed" for r in on_reference.values()), \
+        {name: r.outcome.message[:300] for name, r in on_reference.items()}
+
+
+def test_no_library_module_of_the_student_package_chooses_the_reference_face():
+    # speculative.py held collide_polygon_polygon's reference-face rule word for word; it
+    # now asks the exercise function, so in the student package it is not written yet.
+    library = [path for path in EXERCISES_DIR.rglob("*.py")
+               if path.read_text(encoding="utf-8").startswith("# Library file")]
+    assert any(path.name == "speculative.py" for path in library)
+    holding = [str(path.relative_to(EXERCISES_DIR)) for path in library
+               if "REFERENCE_FACE_RELATIVE_TOL" in path.read_text(encoding="utf-8")
+               or "max_face_separation(" in path.read_text(encoding="utf-8")]
+    assert not holding, f"library files holding the reference-face rule: {holding}"
+    from exercises.narrowphase.speculative import speculative_polygon_manifold
+    from exercises.shapes import AABB
+    with pytest.raises(NotImplementedError, match="reference_face_candidates|max_face_separation"):
+        speculative_polygon_manifold(AABB((-5.0, -1.0), (5.0, 0.0)), AABB((-0.5, -0.1), (0.5, 0.9)))
+
+
+#: reference_face_manifold without the check for a repeated point: a zero-size incident
+#: face gives its one point twice.
+MANIFOLD_WITH_REPEATED_POINTS = (Replacement("narrowphase.polygon_polygon", "reference_face_manifold", '''
+    def reference_face_manifold(ref_vertices, ref_normal, ref_face, inc_vertices, inc_normals, inc_faces,
+                                ref_name, scale, margin=0.0):
+        n = ref_normal
+        tangent = np.array([-n[1], n[0]])
+        i1, i2 = ref_face, (ref_face + 1) % len(ref_vertices)
+        v1, v2 = ref_vertices[i1], ref_vertices[i2]
+        j = incident_face(inc_normals, inc_faces, n)
+        j2 = (j + 1) % len(inc_vertices)
+        segment = [(inc_vertices[j], (ref_name, ref_face, j, j)), (inc_vertices[j2], (ref_name, ref_face, j, j2))]
+        roundoff = KEEP_POINT_TOL * scale
+        segment = clip_segment_to_half_plane(segment, tangent, float(tangent @ v2), roundoff)
+        segment = clip_segment_to_half_plane(segment, -tangent, float(-tangent @ v1), roundoff)
+        points, depths, feature_ids = [], [], []
+        for point, feature in segment:
+            separation = float(n @ (point - v1))
+            if separation <= margin + roundoff:
+                points.append(point - 0.5 * separation * n)
+                depths.append(-separation)
+                feature_ids.append(feature)
+        return points, depths, feature_ids
+    '''),)
+
+
+def test_a_repeated_contact_point_fails_public_tests_and_is_named(tmp_path):
+    # On main only the hidden contacts.degenerate_shapes saw it.
+    names = {"contacts.reference_face_manifold", "contacts.polygon_polygon"}
+    results = graded(tmp_path, MANIFOLD_WITH_REPEATED_POINTS, names)
+    manifold, polygons = results["contacts.reference_face_manifold"], results["contacts.polygon_polygon"]
+    assert manifold.score == 0, manifold.outcome.message[:500]
+    assert polygons.score <= polygons.test.points / 2, (polygons.score, polygons.outcome.message[:500])
+    for result in (manifold, polygons):
+        assert "are the same point" in result.outcome.message, result.outcome.message[:1000]

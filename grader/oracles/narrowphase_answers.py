@@ -123,7 +123,7 @@ def contact_problem(got, want: dict | None, atol: float = CONTACT_ATOL) -> str |
         return f"contact points must be finite, got {show(rows)}"
     if len(points) != len(want_points):
         return (f"expected {len(want_points)} contact point(s) {show([p.tolist() for p in want_points])}, "
-                f"got {len(points)}: {show(rows)}")
+                f"got {len(points)}: {show(rows)}{repeated_point_text(points, atol)}")
     remaining = list(range(len(want_points)))
     matched = []
     for p in points:
@@ -134,6 +134,17 @@ def contact_problem(got, want: dict | None, atol: float = CONTACT_ATOL) -> str |
                     f"between the two surfaces), got {show(rows)}")
         matched.append(remaining.pop(k))
     return _depths_problem(got, want, points, matched, atol) or _feature_ids_problem(got, want, points, matched)
+
+
+def repeated_point_text(points: list, atol: float = CONTACT_ATOL) -> str:
+    """``": points i and j are the same point, ..."`` when two of ``points`` (arrays, m) lie
+    within ``atol`` of each other, else ``""``: the end of a message about the number of points."""
+    for i in range(len(points)):
+        for j in range(i + 1, len(points)):
+            if float(np.hypot(*(points[i] - points[j]))) <= atol:
+                return (f": points {i} and {j} are the same point, and a manifold never holds a point twice "
+                        f"(the two ends of a zero-size incident face give one contact point)")
+    return ""
 
 
 def _depths_problem(got: dict, want: dict, points: list, matched: list, atol: float) -> str | None:

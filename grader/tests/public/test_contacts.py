@@ -36,7 +36,7 @@ from grader.oracles import plain
 from grader.oracles import random_cases as rc
 from grader.oracles.brute_sat import contact_is_defined
 from grader.harness.compare import call_text
-from grader.oracles.narrowphase_answers import (contact_problem, contact_text, pair_figure,
+from grader.oracles.narrowphase_answers import (contact_problem, contact_text, pair_figure, repeated_point_text,
                                                 with_feature_ids)
 from grader.oracles.pymunk_geometry import definite_overlap, pymunk_contact
 
@@ -208,6 +208,21 @@ def test_circle_polygon(student):
                    st.tuples(rc.circles, rc.obbs))
 
 
+#: Boxes of zero width or zero size, worked out by hand: (A, B, normal, depth, point).  B's
+#: incident face has length zero, so its two clipped ends are one point: one contact point.
+ZERO_SIZE_PAIRS = [
+    # B the segment x = 0.5, y in [0.7, 1.1], into A's top face y = 1: A's face and B's bottom
+    # face tie at -0.3 (A keeps the role); B's face 0 runs from (0.5, 0.7) to (0.5, 0.7): the
+    # point halfway between (0.5, 0.7) and y = 1.
+    (plain.obb((0, 0), (1, 1), 0.0), plain.obb((0.5, 0.9), (0.0, 0.2), 0.0), (0, 1), 0.3, (0.5, 0.85)),
+    # B the point (1.5, 0.75) inside A = [0, 2] x [0, 1]: A's top face (-0.25) ties with B's
+    # face 0; the point halfway between (1.5, 0.75) and y = 1.
+    (plain.aabb((0, 0), (2, 1)), plain.obb((1.5, 0.75), (0.0, 0.0), 0.0), (0, 1), 0.25, (1.5, 0.875)),
+    # Two points at (2, 1), one turned: every separation is 0, A's face 0 (-y) wins the tie.
+    (plain.obb((2, 1), (0.0, 0.0), 0.0), plain.obb((2, 1), (0.0, 0.0), 0.7), (0, -1), 0.0, (2, 1)),
+]
+
+
 @pytest.mark.points(4)
 @pytest.mark.partial_credit
 def test_polygon_polygon(student):
@@ -224,6 +239,8 @@ def test_polygon_polygon(student):
     batch += with_pymunk(cases.far_pairs(rng, 10, RIGHT, lambda r: (rc.random_obb(r, 0.8), rc.random_obb(r, 0.8))),
                          "right of the origin")
     batch += touching(cases.random_touching_boxes(rng, kinds=(("obb", "polygon")[k % 2], "obb")) for k in range(10))
+    batch += [(a, b, plain.contact(n, d, [p]), "a box of zero width or zero size: one contact point, not the same "
+               "point twice") for a, b, n, d, p in ZERO_SIZE_PAIRS]
     check_contacts(student, POLYGONS, "collide_polygon_polygon", batch, "boxes and polygons",
                    st.tuples(rc.obbs, rc.obbs))
 
@@ -407,11 +424,21 @@ def test_clip_segment(student):
                                        f"{show(list(case[0][1]))}, {show(case[0][2])}, tolerance={show(case[0][3])})"))
 
 
+#: The outward normals of an axis-aligned box's faces 0 to 3 (-y, +x, +y, -x).
+BOX_NORMALS = np.array([[0.0, -1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0]])
+
+
 def box_faces(vertices) -> tuple:
-    """(vertices, unit outward normals, face indices) of a convex CCW polygon, every edge kept."""
+    """(vertices, unit outward normals, face indices) of a convex CCW polygon, every edge kept.
+
+    An edge of length zero (a box of zero width or size) gets the normal of that face of an
+    axis-aligned box, as polygon_faces gives a box of angle 0."""
     v = np.asarray(vertices, dtype=float)
     edges = np.roll(v, -1, axis=0) - v
-    normals = np.column_stack([edges[:, 1], -edges[:, 0]]) / np.hypot(edges[:, 0], edges[:, 1])[:, None]
+    lengths = np.hypot(edges[:, 0], edges[:, 1])
+    normals = np.column_stack([edges[:, 1], -edges[:, 0]]) / np.where(lengths > 0.0, lengths, 1.0)[:, None]
+    if not np.all(lengths > 0.0):
+        normals[lengths == 0.0] = BOX_NORMALS[lengths == 0.0]
     return v, normals, np.arange(len(v))
 
 
@@ -452,6 +479,12 @@ MANIFOLD_CASES = [
     (far_floor(1e6), (0, 1), 2, [(1e6 - 0.5, 4e-7), (1e6 + 0.5, 4e-7), (1e6 + 0.5, 1), (1e6 - 0.5, 1)], "A", 1e6 + 1,
      [((1e6 - 0.5, 2e-7), -4e-7, ("A", 2, 0, 0)), ((1e6 + 0.5, 2e-7), -4e-7, ("A", 2, 0, 1))]),
     (FLOOR, (0, 1), 2, [(-0.5, 4e-7), (0.5, 4e-7), (0.5, 1), (-0.5, 1)], "A", 1.0, []),
+    # A box of zero size at (0.2, -0.1): its incident face 0 runs from (0.2, -0.1) to itself, so
+    # its two clipped ends are one point, kept once with the first end's id.
+    (FLOOR, (0, 1), 2, [(0.2, -0.1)] * 4, "A", 1.0, [((0.2, -0.05), 0.1, ("A", 2, 0, 0))]),
+    # A box of zero width (the segment x = 0.3, y in [-0.2, 0.4]): its bottom face 0 has length 0.
+    (FLOOR, (0, 1), 2, [(0.3, -0.2), (0.3, -0.2), (0.3, 0.4), (0.3, 0.4)], "A", 1.0,
+     [((0.3, -0.1), 0.2, ("A", 2, 0, 0))]),
 ]
 #: With a margin (the last entry, m): points up to that far above the reference face are
 #: kept, each with a negative depth (the soft step's speculative contacts).
@@ -477,7 +510,10 @@ def manifold_problem(got, want: list) -> str | None:
         return f"must return (points, depths, feature_ids), three lists of the same length, got {show(got)}"
     found = list(zip(*got))
     if len(found) != len(want):
-        return f"expected {len(want)} contact point(s) {show([list(w[0]) for w in want])}, got {len(found)}: {show(got[0])}"
+        vectors = [as_vector(point, 2) for point in got[0]]
+        repeated = repeated_point_text(vectors) if all(v is not None for v in vectors) else ""
+        return (f"expected {len(want)} contact point(s) {show([list(w[0]) for w in want])}, got {len(found)}: "
+                f"{show(got[0])}{repeated}")
     remaining = list(found)
     for point, depth, feature in want:
         match = [item for item in remaining if as_vector(item[0], 2) is not None

@@ -209,17 +209,21 @@ def test_sample_problems_name_what_is_wrong():
 
     sample = BuggySample("made-up", "nothing", 0, (), frozenset({"sat.a", "sat.b", "sat.c", "sat.d", "sat.e"}),
                          weak_tests=frozenset({"sat.c", "sat.d"}))
+    # A failed partial-credit test keeps at most half its points (a quarter at 90 % right
+    # cases, 0.375 of them at 95 %): a test listed as weak that fails loses at least half.
     assert sample_problems(sample, [result("sat.a"), result("sat.b", fraction=0.9), result("sat.c", fraction=0.95),
-                                    result("sat.d", fraction=0.95), result("sat.e", "error")]) == \
-        ["sat.e ends 'error', not 'failed': "]
+                                    result("sat.d", fraction=0.95), result("sat.e", "error")]) == [
+        "sat.c is listed as weak but loses at least half its points (0.75 of 2 left): take it out of weak_tests",
+        "sat.d is listed as weak but loses at least half its points (0.75 of 2 left): take it out of weak_tests",
+        "sat.e ends 'error', not 'failed': "]
     problems = sample_problems(sample, [result("sat.a", "passed"), result("sat.b", fraction=0.95),
                                         result("sat.c", fraction=0.5), result("sat.x")])
     assert problems[0].startswith("expects sat.d to fail, but sat.d was not graded")
     assert problems[1].startswith("expects sat.e to fail, but sat.e was not graded")
     assert problems[2] == "not caught by sat.a (it passed)"
     assert problems[3].startswith("also fails sat.x: failed")
-    assert problems[4].startswith("sat.b keeps 1.5 of 2 points (95.0% of its cases right)")
-    assert problems[5].startswith("sat.c is listed as weak but loses at least half its points")
+    assert problems[4].startswith("sat.c is listed as weak but loses at least half its points (0 of 2 left)")
+    assert len(problems) == 5   # sat.b at 95 % keeps 0.75 of 2: under half, no problem
 
 
 def test_samples_are_well_formed(all_tests):

@@ -127,7 +127,8 @@ def test_the_student_edition_has_no_twins_and_steps_with_the_students_code(relea
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     assert "REFUSED backend='numba' runs the compiled twins of the instructor's edition" in result.stdout
-    assert "STUB write reference_face_manifold()" in result.stdout, result.stdout
+    # The first exercise a box stack reaches: the reference-face choice of the contacts exercise.
+    assert "STUB write reference_face_candidates()" in result.stdout, result.stdout
     # A student who wrote the contacts and sequential exercises (here: the reference's
     # files) steps the stack exactly as the instructor's readable loop does.
     solved = tmp_path / "solved"

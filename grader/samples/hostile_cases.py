@@ -228,9 +228,11 @@ BROKEN = (
         removes=(MOMENTUM,),
         expect=raising(MOMENTUM_TESTS, ERROR, ("could not be imported", "No module named"))),
     HostileCase(
-        "broken-missing-function", "broken", "perfectly_inelastic_1d was deleted from response/momentum_1d.py.",
+        "broken-missing-function", "broken", "perfectly_inelastic_1d was deleted from response/momentum_1d.py "
+        "(the trusted side reads the source first: no statement defines it).",
         removes=(f"{MOMENTUM}:perfectly_inelastic_1d",),
-        expect=raising(INELASTIC, ERROR, ("the function is missing", "has no perfectly_inelastic_1d"))),
+        expect=(Expect(INELASTIC, NOT_IMPLEMENTED, ("perfectly_inelastic_1d", "no statement of the source you "
+                                                    "handed in defines it")),)),
     HostileCase(
         "broken-returns-none", "broken", "perfectly_inelastic_1d forgets its return statement.",
         replacements=inelastic("total = m1 * v1 + m2 * v2\ncommon = total / (m1 + m2)\n"),

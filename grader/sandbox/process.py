@@ -576,7 +576,9 @@ class Sandbox:
         """Call ``module.function(*args, **kwargs)`` in the worker (arguments already encoded).
 
         ``repeat`` calls it that many times (for timing); ``batch=True`` takes ``args``
-        as a list of argument lists and returns the list of values.
+        as a list of argument lists and returns the list of values; ``program`` (then
+        ``module`` and ``function`` are unused) runs a list of calls, one value each
+        (:meth:`grader.sandbox.worker.Worker.run_program`).
 
         The request carries a fresh random nonce; only a line echoing it (and the
         request's id) is taken as the answer, every other line is skipped.  What this

@@ -173,3 +173,13 @@ def test_the_graded_tests_import_only_what_ships():
                 role = node.module.split(".")[1]
                 allowed = (*SHIPPED_ROLES, "tests") if "hidden" in path.parts else SHIPPED_ROLES
                 assert role in allowed, f"{path.relative_to(GRADER)} imports {node.module}"
+
+
+def test_no_private_name_crosses_a_module():
+    crossing = []
+    for name, path in modules().items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and (node.level or (node.module or "").startswith("grader")):
+                crossing += [f"grader.{name}:{node.lineno} imports {a.name}" for a in node.names
+                             if a.name.startswith("_") and a.name != "__version__"]
+    assert crossing == []

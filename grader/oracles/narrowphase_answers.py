@@ -136,9 +136,17 @@ def contact_problem(got, want: dict | None, atol: float = CONTACT_ATOL) -> str |
     return _depths_problem(got, want, points, matched, atol) or _feature_ids_problem(got, want, points, matched)
 
 
+#: Most points scanned for a repeated one (see repeated_point_text).
+REPEAT_SCAN_POINTS = 8
+
+
 def repeated_point_text(points: list, atol: float = CONTACT_ATOL) -> str:
     """``": points i and j are the same point, ..."`` when two of ``points`` (arrays, m) lie
-    within ``atol`` of each other, else ``""``: the end of a message about the number of points."""
+    within ``atol`` of each other, else ``""``: the end of a message about the number of points.
+    Only a handful of points are compared (a 2D manifold holds at most two): an answer of
+    thousands is wrong for its count alone, and must not cost the trusted side a pair scan."""
+    if len(points) > REPEAT_SCAN_POINTS:
+        return ""
     for i in range(len(points)):
         for j in range(i + 1, len(points)):
             if float(np.hypot(*(points[i] - points[j]))) <= atol:

@@ -536,6 +536,9 @@ def test_every_sandbox_of_a_process_isolates_as_one_decision_says(package, monke
         boxes = [Sandbox(package, Limits(call_timeout=5.0)) for _ in range(3)]
         assert [box.isolation for box in boxes] == ["plain"] * 3   # bubblewrap refused here: the fallback
         assert len(trials) == 1
+        # What a batch decided and handed to its workers is not tried again (a busy moment
+        # must not turn a grading worker's sandbox into an error).
+        assert isolation.decided_isolation("bwrap") == "bwrap" and len(trials) == 1
         for box in boxes:
             box.close()
     finally:

@@ -52,9 +52,18 @@ def bwrap_works() -> bool:
 
 @functools.cache
 def decided_isolation(requested: str = "auto") -> str:
-    """The isolation a sandbox asked for ``requested`` runs in, decided once per process
-    by :func:`resolve_isolation` (its trial costs a bubblewrap start)."""
-    return resolve_isolation(requested)
+    """The isolation a sandbox asked for ``requested`` runs in, decided once per process.
+
+    ``"auto"``: :func:`resolve_isolation`, its trial run included (it costs a bubblewrap
+    start).  An explicit ``"bwrap"`` or ``"plain"`` was decided by the caller (a batch
+    resolves it once and hands it to its grading workers): only what is installed is
+    checked, never a second trial that a busy moment could fail."""
+    if requested == "auto":
+        return resolve_isolation(requested)
+    try:
+        return choose_isolation(requested)
+    except ValueError as exc:
+        raise GradingError(str(exc)) from None
 
 
 def resolve_isolation(requested: str = "auto", warn: Callable[[str], None] | None = None) -> str:

@@ -27,12 +27,9 @@ from grader.release.gradescope import build_autograder_zip
 from grader.batch.grade import grade_submissions
 from grader.sandbox.isolation import resolve_isolation
 from grader.harness.run import load_spec
-from grader.student.submit import write_submission
+from tools import release_check
 
 REPO = Path(__file__).resolve().parent.parent
-IGNORE = shutil.ignore_patterns("__pycache__", "*.pyc")
-#: Exercise files the sample student has solved (the rest are still the stubs).
-SOLVED = ("broadphase/uniform_grid.py", "response/momentum_1d.py")
 
 pytestmark = pytest.mark.xdist_group("fresh-autograder")
 
@@ -76,13 +73,8 @@ def image(tmp_path_factory):
 def run_autograder(root: Path, submission: Path, isolation: str = "auto") -> tuple[subprocess.CompletedProcess, dict]:
     """Put ``submission`` (a folder's contents, or a zip as Gradescope unpacks it) in place
     and run ``run_autograder`` with the image's Python; its result and results.json."""
-    shutil.rmtree(root / "submission", ignore_errors=True)
+    release_check.place(submission, root / "submission")
     shutil.rmtree(root / "results", ignore_errors=True)
-    if submission.suffix == ".zip":
-        with zipfile.ZipFile(submission) as handle:
-            handle.extractall(root / "submission")
-    else:
-        shutil.copytree(submission, root / "submission", ignore=IGNORE)
     env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTHON", "VIRTUAL_ENV"))}
     env.update(AUTOGRADER_ROOT=str(root), AUTOGRADER_PYTHON=str(root / "venv" / "bin" / "python"),
                AUTOGRADER_ISOLATION=isolation)
@@ -96,16 +88,8 @@ def run_autograder(root: Path, submission: Path, isolation: str = "auto") -> tup
 @pytest.fixture(scope="module")
 def submissions(tmp_path_factory) -> dict[str, Path]:
     """The reference, the stubs, and a student's zip written by `grader submit` (two
-    exercise files solved, the rest stubs)."""
-    folder = tmp_path_factory.mktemp("submissions")
-    shutil.copytree(REPO / "solutions", folder / "reference" / "exercises", ignore=IGNORE)
-    shutil.copytree(REPO / "exercises", folder / "stubs" / "exercises", ignore=IGNORE)
-    student = folder / "student-copy" / "exercises"
-    shutil.copytree(REPO / "exercises", student, ignore=IGNORE)
-    for name in SOLVED:
-        shutil.copyfile(REPO / "solutions" / name, student / name)
-    zipped = write_submission(student, folder / "student.zip", name="student").path
-    return {"reference": folder / "reference", "stubs": folder / "stubs", "student": zipped}
+    exercise files solved, the rest stubs): the release-check's three."""
+    return release_check.submissions(tmp_path_factory.mktemp("submissions"))
 
 
 @pytest.fixture(scope="module")
@@ -114,10 +98,6 @@ def local_grades(submissions, tmp_path_factory) -> dict[str, dict]:
     rows = grade_submissions(list(submissions.values()), tmp_path_factory.mktemp("local"), jobs=1,
                              progress=False, html=False)
     return {name: row["results"] for name, row in zip(submissions, rows)}
-
-
-def by_test(data: dict) -> dict[str, tuple[str, float]]:
-    return {t["extra_data"]["test"]: (t["extra_data"]["status"], t["score"]) for t in data["tests"]}
 
 
 def test_setup_check_passes_in_the_fresh_venv(image):
@@ -135,7 +115,7 @@ def test_the_image_grades_like_local_grading(image, submissions, local_grades, n
     completed, data = run_autograder(image, submissions[name])
     assert completed.returncode == 0 and data is not None, completed.stdout + completed.stderr
     local = local_grades[name]
-    assert by_test(data) == by_test(local)
+    assert release_check.by_test(data) == release_check.by_test(local)
     assert data["score"] == local["score"] and data["max_score"] == local["max_score"]
     expected = {"reference": local["max_score"], "stubs": 0}.get(name)
     if expected is not None:

@@ -60,6 +60,17 @@ def encode(value: Any) -> Any:
     return codec.encode_value(value)
 
 
+def raised_case(result: CallResult, count: int, describe) -> str:
+    """Which of ``count`` calls raised, as ``describe(index)`` says it, when the worker's
+    message starts by naming it (the name is taken off the message); else ``""``."""
+    raised = BATCH_CASE.match(result.message or "")
+    if not raised:
+        return ""
+    result.message = result.message[raised.end():]
+    index = int(raised[1])
+    return describe(index) if index < count else ""
+
+
 class StudentCode:
     """The student's ``exercises`` package, reached through a sandboxed worker.
 
@@ -115,13 +126,8 @@ class StudentCode:
         """One value per argument tuple in ``cases``, in one round trip.  A case that
         raises is named in the failure, with its input."""
         result = self.raw(module, function, cases, timeout=timeout, batch=True)
-        raised = BATCH_CASE.match(result.message or "")
-        case = ""
-        if raised:
-            result.message = result.message[raised.end():]
-            index = int(raised[1])
-            if index < len(cases):
-                case = f"on the case {call_text(function, *(encode(a) for a in cases[index]))}"
+        case = raised_case(result, len(cases),
+                           lambda index: f"on the case {call_text(function, *(encode(a) for a in cases[index]))}")
         values = self.value_of(result, f"{module}.{function}", case)
         if not isinstance(values, list) or len(values) != len(cases):
             got = f"{len(values)} results" if isinstance(values, list) else "no list of results"
@@ -157,13 +163,8 @@ class StudentCode:
                    "results": list(results)}
         result = self.sandbox.call("", "", program=program, timeout=timeout)
         self._keep_output(result.output)
-        raised = BATCH_CASE.match(result.message or "")
-        case = ""
-        if raised:
-            result.message = result.message[raised.end():]
-            index = int(raised[1])
-            if index < len(calls):
-                case = f"at call {index + 1} of {len(calls)} ({functions[calls[index][0]][1]})"
+        case = raised_case(result, len(calls),
+                           lambda index: f"at call {index + 1} of {len(calls)} ({functions[calls[index][0]][1]})")
         values = self.value_of(result, name, case)
         if not isinstance(values, dict) or sorted(values) != sorted(results):
             raise StudentCallFailed(Outcome("error", message=f"{name}: the worker did not send back the values "

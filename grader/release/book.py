@@ -41,6 +41,8 @@ from pathlib import Path
 
 from ..student.notebook import METADATA_KEY, outputs_digest
 
+from .module_graph import imported_modules as imported_modules_of_python
+
 SOURCE_PACKAGE = "solutions"
 TARGET_PACKAGE = "exercises"
 MAGIC = "reference_fallback"
@@ -121,14 +123,7 @@ def python_of(source: str) -> str:
 
 def imported_modules(source: str) -> list[str]:
     """Absolute module names a cell imports (its magics transformed first)."""
-    tree = ast.parse(python_of(source))
-    names = []
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            names += [alias.name for alias in node.names]
-        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
-            names.append(node.module)
-    return names
+    return imported_modules_of_python(python_of(source))
 
 
 def check_code(source: str, where: str) -> None:

@@ -44,7 +44,11 @@ REPEATS = 1
 #: came within 1.85 and 2.76 of each other, too close under load); at 8 times more the
 #: reference quadtree 1.26 to 1.29, a quadtree whose pairs test every pair 6.2 to 9.5
 #: (at 16 times it runs out of memory: a failure on the large scene fails the check).
-MAX_GROWTH = 3.5
+MAX_GROWTH = 4.5
+#: Most measurements of one function while its ratio stays above MAX_GROWTH (the
+#: smallest is kept): on a machine loaded by two test runs and an image build, the
+#: reference grid once measured 3.6.
+MEASUREMENTS = 3
 #: The large scene's call may take at most this many times the small one's (and at least
 #: MIN_TIMEOUT seconds) before it is stopped: a pure-Python brute force on 32 000 boxes
 #: would take minutes.
@@ -121,10 +125,12 @@ def growth_problem(student, module: str, function: str, args_of: Callable[[np.nd
     if key not in verdicts:
         try:
             ratio, how = growth(student, module, function, args_of, factor, small_scene)
-            if ratio > MAX_GROWTH:  # measured again: a busy moment must not cost the points
-                second, second_how = growth(student, module, function, args_of, factor, small_scene)
-                if second < ratio:
-                    ratio, how = second, second_how
+            for _ in range(MEASUREMENTS - 1):   # measured again: a busy moment must not cost the points
+                if ratio <= MAX_GROWTH:
+                    break
+                again, again_how = growth(student, module, function, args_of, factor, small_scene)
+                if again < ratio:
+                    ratio, how = again, again_how
         except StudentCallFailed:
             ratio, how = 0.0, ""
         verdicts[key] = None if ratio <= MAX_GROWTH else (

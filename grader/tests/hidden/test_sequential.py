@@ -1,5 +1,6 @@
-"""Hidden sequential-impulse tests: random visits against the reference, and a stack of
-ten boxes stepped with the student's sweeps against the complementarity answer.
+"""Hidden sequential-impulse tests: random visits against the reference (joint rows
+among them), and a stack of ten boxes with a chain of three hanging beside it, stepped
+with the student's sweeps, against the complementarity answer.
 
 Instructor's side only (it imports ``solutions``).  The stack is stepped here, in the
 trusted process, with the reference's contact solver whose row visits are the
@@ -9,7 +10,10 @@ and their answers are wired back here, so nothing but those two functions runs o
 student's side.  A resting stack's contact k, counted from the bottom, carries the
 weight of the ``count - k`` boxes above it, ``(count - k) m g dt`` per step (the
 solution of the LCP of the book's first chapter); the student's impulses must reach it
-and the boxes stay at rest.
+and the boxes stay at rest.  The chain's rigid distance joints are rows of the same
+kernel with ``lower = -inf``: joint k, counted from the ceiling, pulls with the weight
+of the ``chain - k`` boxes below it, ``-(chain - k) m g dt`` per step (an impulse along
+the joint's direction, ceiling to box, is negative when it pulls).
 """
 from __future__ import annotations
 
@@ -20,15 +24,17 @@ from grader.harness.compare import show
 from grader.harness.credit import check_cases, fail
 from grader.harness.student_code import register
 from grader.sandbox.codec import is_number
-from grader.tests.public.test_sequential import answer_problem, describe, random_cases
+from grader.tests.public.test_sequential import answer_problem, describe, random_cases, random_joint_rows
 from solutions.body import Body
+from solutions import joints as joint_solver
 from solutions.contact import Contact
+from solutions.joints import DistanceJoint, JointSolver
 from solutions.response import contact_solver
 from solutions.response.contact_solver import ContactSolver, SolverSettings
 from solutions.solver.contact_point import apply_friction_impulse, apply_normal_impulse
 
 MODULE = "solver.contact_point"
-BOXES, STEPS, DT, G = 10, 60, 1 / 60, 9.81
+BOXES, CHAIN, STEPS, DT, G = 10, 3, 60, 1 / 60, 9.81
 #: 20 sweeps a step, warm started, leave the loads within 0.1 % of the answer after 1 s
 #: (measured on the reference: 0.03 %) and the boxes within 2 mm/s of rest (0.7).
 LOAD_TOLERANCE, SPEED_TOLERANCE = 1e-3, 2e-3
@@ -49,29 +55,31 @@ def against_reference(student, function: str, reference_function, cases) -> None
 
 @pytest.mark.points(1)
 @pytest.mark.visibility("hidden")
-@pytest.mark.title("Sequential impulses: random visits against the reference (normal and friction)")
+@pytest.mark.title("Sequential impulses: random visits against the reference (normal, joint rows and friction)")
 def test_random_against_reference(student):
-    against_reference(student, "apply_normal_impulse", apply_normal_impulse, random_cases(901, 40, friction=False))
+    against_reference(student, "apply_normal_impulse", apply_normal_impulse,
+                      random_cases(901, 40, friction=False) + random_joint_rows(903, 20))
     against_reference(student, "apply_friction_impulse", apply_friction_impulse, random_cases(902, 40, friction=True))
 
 
 #: The program's functions (StudentCode.run_program), by index.
 NORMAL, FRICTION = 0, 1
 SWEEP_FUNCTIONS = [(MODULE, "apply_normal_impulse"), (MODULE, "apply_friction_impulse")]
-STACK = "the stack of ten boxes with your sweeps"
+STACK = "the stack of ten boxes and the hanging chain with your sweeps"
 
 
 def student_sweeps(student):
-    """A ``solve_constraints`` (:mod:`solutions.solver.kernel`, accumulated rigid rows,
-    friction first, no block solve) whose visits are the student's functions, run in
+    """A ``solve_constraints`` (:mod:`solutions.solver.kernel`, accumulated rows, friction
+    first or none (joints), no block solve) whose visits are the student's functions, run in
     their sandbox in one round trip; which row is visited when, what each visit is
     given and where its answer goes are decided here; the visits' answers come back
     as the velocities and accumulated impulses after the sweeps."""
 
     def solve_constraints(velocity, rows, iterations, normal_total, tangent_total, target, mass_scale,
                           impulse_scale, accumulate=True, friction_first=False, use_friction=True, use_block=True):
-        if not (accumulate and friction_first and use_friction) or (use_block and np.any(rows.block)):
-            raise AssertionError("the stack scene solves accumulated rows, friction first, without block solves")
+        if not accumulate or (use_friction and not friction_first) or (use_block and np.any(rows.block)):
+            raise AssertionError("the stack scene solves accumulated rows, friction first or none, without block "
+                                 "solves")
         registers = {f"v{i}": [float(x) for x in row] for i, row in enumerate(velocity)}
         groups = []
         for g in range(len(rows.first)):
@@ -89,7 +97,7 @@ def student_sweeps(student):
             for a, b, members in groups:
                 bodies = [register(f"v{a}"), register(f"v{b}")]
                 for k in members:
-                    if rows.friction[k] != 0.0:
+                    if use_friction and rows.friction[k] != 0.0:
                         calls.append((FRICTION, [*bodies, register(f"p{k}"), register(f"N{k}"), register(f"T{k}")],
                                       [f"v{a}", f"v{b}", f"T{k}"]))
                 for k in members:
@@ -111,19 +119,28 @@ def student_sweeps(student):
     return solve_constraints
 
 
-def stack_of_boxes(steps: int, count: int, dt: float, iterations: int = 20) -> tuple[np.ndarray, np.ndarray]:
-    """``count`` 1 m, 1 kg boxes stacked on static ground, stepped with the reference's
-    contact solver (the block solver off, so that every normal impulse is a visit; the
-    sweeps are whatever :func:`contact_solver.kernel` gives).  The contacts are exact
-    (each face on the one below, depth 0).  Per step the boxes' (y, vy) and the
-    accumulated normal impulse of each contact, bottom first."""
+def stack_of_boxes(steps: int, count: int, dt: float, iterations: int = 20,
+                   chain: int = CHAIN) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``count`` 1 m, 1 kg boxes stacked on static ground, and ``chain`` 0.5 m, 1 kg boxes
+    hanging beside them from a static ceiling by rigid distance joints (0.5 m long, top
+    anchor to bottom anchor), stepped with the reference's contact and joint solvers (the
+    block solver off, so that every normal impulse is a visit; the sweeps are whatever
+    :func:`solutions.solver.kernel.kernel` gives).  The contacts are exact (each face on
+    the one below, depth 0) and the joints start at their length.  Per step the boxes'
+    (y, vy), the stack's then the chain's, the accumulated normal impulse of each contact,
+    bottom first, and of each joint, ceiling first."""
     ground = Body.box(10.0, 1.0, is_static=True, position=(0.0, -0.5), friction=0.6)
     bodies = [ground] + [Body.box(1.0, 1.0, position=(0.0, 0.5 + k), friction=0.6) for k in range(count)]
+    ceiling = Body.box(2.0, 1.0, is_static=True, position=(8.0, count + 2.5))
+    hanging = [ceiling] + [Body.box(0.5, 0.5, position=(8.0, count + 1.25 - k)) for k in range(chain)]
+    rods = [DistanceJoint(k, k + 1, anchor_a=(0.0, -0.5 if k == 0 else -0.25), anchor_b=(0.0, 0.25), length=0.5)
+            for k in range(chain)]
     solver = ContactSolver(SolverSettings(iterations=iterations, block_solver=False, position_correction="none",
                                           restitution_threshold=0.0))
-    trajectory, impulses = [], []
+    joints = JointSolver(iterations=iterations)
+    trajectory, impulses, pulls = [], [], []
     for _ in range(steps):
-        for body in bodies[1:]:
+        for body in bodies[1:] + hanging[1:]:
             body.velocity = body.velocity + dt * np.array([0.0, -G])
         manifolds = []
         for k in range(count):
@@ -131,31 +148,44 @@ def stack_of_boxes(steps: int, count: int, dt: float, iterations: int = 20) -> t
             manifolds.append((k, k + 1, Contact((0.0, 1.0), 0.0, [(-0.5, top), (0.5, top)],
                                                 feature_ids=("left", "right"))))
         solver.solve(bodies, manifolds, dt)
-        for body in bodies[1:]:
+        joints.solve(hanging, rods, dt)
+        for body in bodies[1:] + hanging[1:]:
             body.position = body.position + dt * body.velocity
             body.angle += dt * body.angular_velocity
-        trajectory.append([[float(b.position[1]), float(b.velocity[1])] for b in bodies[1:]])
+        trajectory.append([[float(b.position[1]), float(b.velocity[1])] for b in bodies[1:] + hanging[1:]])
         totals = [0.0] * count
         for i, _, _, normal, _ in solver.contact_impulses:
             totals[i] += float(normal)
         impulses.append(totals)
-    return np.array(trajectory), np.array(impulses)
+        pulls.append([joints.impulses.get(k, 0.0) for k in range(chain)])
+    return np.array(trajectory), np.array(impulses), np.array(pulls)
 
 
 @pytest.mark.points(2)
 @pytest.mark.visibility("hidden")
-@pytest.mark.title("Sequential impulses: a stack of ten boxes rests on the complementarity answer")
+@pytest.mark.title("Sequential impulses: a stack of ten boxes rests on the complementarity answer, a chain of "
+                   "three hangs from its joints")
 def test_stack_of_ten(student, monkeypatch):
     monkeypatch.setattr(contact_solver, "kernel", lambda backend: student_sweeps(student))
-    trajectory, impulses = stack_of_boxes(STEPS, BOXES, DT)
-    if not (np.all(np.isfinite(trajectory)) and np.all(np.isfinite(impulses))):
-        fail("the stack of ten boxes produced non-finite positions, velocities or impulses")
+    monkeypatch.setattr(joint_solver, "kernel", lambda backend: student_sweeps(student))
+    trajectory, impulses, pulls = stack_of_boxes(STEPS, BOXES, DT)
+    if not (np.all(np.isfinite(trajectory)) and np.all(np.isfinite(impulses)) and np.all(np.isfinite(pulls))):
+        fail("the stack of ten boxes and the chain produced non-finite positions, velocities or impulses")
     want = np.array([(BOXES - k) * G * DT for k in range(BOXES)])       # N s per step, bottom contact first
     worst = int(np.argmax(np.abs(impulses[-1] - want)))
     if abs(impulses[-1, worst] - want[worst]) > LOAD_TOLERANCE * want[worst]:
         fail(f"after {STEPS} steps contact {worst} (counted from the ground) carries {impulses[-1, worst]:.6g} N s "
              f"per step; a resting stack puts the weight of the {BOXES - worst} boxes above it there, "
              f"{want[worst]:.6g} N s (all contacts: {np.round(impulses[-1], 6).tolist()})")
+    hold = np.array([-(CHAIN - k) * G * DT for k in range(CHAIN)])     # N s per step, the top joint first
+    worst = int(np.argmax(np.abs(pulls[-1] - hold)))
+    if abs(pulls[-1, worst] - hold[worst]) > LOAD_TOLERANCE * abs(hold[worst]):
+        fail(f"after {STEPS} steps joint {worst} of the hanging chain (counted from the ceiling) carries "
+             f"{pulls[-1, worst]:.6g} N s per step; it must pull up the {CHAIN - worst} boxes below it, "
+             f"{hold[worst]:.6g} N s (a joint row's lower bound is -inf: its impulse may be negative; all joints: "
+             f"{np.round(pulls[-1], 6).tolist()})")
     sinking = float(np.abs(trajectory[-1, :, 1]).max())
     if sinking > SPEED_TOLERANCE:
-        fail(f"after {STEPS} steps a box still moves at {sinking:.3g} m/s: the stack does not rest")
+        moving = int(np.argmax(np.abs(trajectory[-1, :, 1])))
+        which = (f"box {moving} of the stack" if moving < BOXES else f"box {moving - BOXES} of the chain")
+        fail(f"after {STEPS} steps {which} still moves at {sinking:.3g} m/s: the stack and the chain do not rest")

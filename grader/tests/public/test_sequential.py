@@ -7,7 +7,8 @@ over the six velocities ``(vx_A, vy_A, w_A, vx_B, vy_B, w_B)`` and checked again
 the ``mass_normal`` / ``mass_tangent`` each case hands over; the velocity change of
 an impulse ``P`` is ``M^-1 J^T P``; the unclamped impulse brings the row's velocity to
 its target (normal) or to 0 (friction); clamping keeps the *accumulated* impulse in
-``[lower, inf)`` (normal) or ``[-mu P, mu P]`` (friction, Coulomb).  Small cases are
+``[lower, inf)`` (normal: ``lower`` is 0 for a contact, ``-inf`` for a joint row, which may
+pull) or ``[-mu P, mu P]`` (friction, Coulomb).  Small cases are
 worked out by hand in the comments.  Every returned value is compared: both bodies'
 ``(vx, vy, w)`` and the new accumulated impulse.
 """
@@ -176,6 +177,24 @@ def random_cases(seed: int, count: int, friction: bool) -> list[tuple]:
     return cases
 
 
+def random_joint_rows(seed: int, count: int) -> list[tuple]:
+    """Normal visits of random joint rows (``lower = -inf``, no friction): the accumulated
+    impulse may go negative (the row pulls), as a distance joint's does."""
+    rng = np.random.default_rng(seed)
+    cases = []
+    for _ in range(count):
+        angle = rng.uniform(0.0, 2 * math.pi)
+        ima, imb = rng.uniform(0.1, 2.0, 2)
+        iia, iib = rng.uniform(0.2, 6.0, 2)
+        point = point_of(math.cos(angle), math.sin(angle), *rng.uniform(-0.8, 0.8, 2), 0.0, 0.0, float(ima),
+                         float(imb), float(iia), float(iib), 0.0, -math.inf)
+        va, vb = ([float(v) for v in rng.normal(0.0, 1.0, 3)] for _ in range(2))
+        scales = (float(rng.uniform(-0.5, 0.5)), 1.0, 0.0) if rng.random() < 0.6 else (
+            float(rng.uniform(-0.5, 0.5)), float(rng.uniform(0.2, 0.9)), float(rng.uniform(0.0, 0.3)))
+        cases.append(((va, vb, point, float(rng.uniform(-1.0, 1.0)), *scales), "a joint row (lower = -inf)"))
+    return cases
+
+
 @pytest.mark.points(2)
 @pytest.mark.title("Sequential impulses, normal: hand-worked points (stop, separate, take back, restitution, soft, "
                    "joint)")
@@ -185,10 +204,10 @@ def test_normal_worked_examples(student):
 
 @pytest.mark.points(2)
 @pytest.mark.partial_credit
-@pytest.mark.title("Sequential impulses, normal: random points, rigid and soft")
+@pytest.mark.title("Sequential impulses, normal: random points, rigid and soft, contacts and joint rows")
 def test_normal_random(student):
-    check(student, "apply_normal_impulse", random_cases(801, 30, friction=False), expected_normal,
-          "random normal visits")
+    check(student, "apply_normal_impulse", random_cases(801, 30, friction=False) + random_joint_rows(803, 15),
+          expected_normal, "random normal visits")
 
 
 @pytest.mark.points(2)

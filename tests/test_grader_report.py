@@ -84,7 +84,7 @@ def png_pixels(data: bytes) -> np.ndarray:
 
 def images(page: str) -> dict[str, np.ndarray]:
     return {alt: png_pixels(base64.b64decode(data))
-            for alt, data in re.findall(r'<img alt="([^"]*)" src="data:image/png;base64,([A-Za-z0-9+/=]+)"', page)}
+            for alt, data in re.findall(r'<img alt="([^"]*)"[^>]* src="data:image/png;base64,([A-Za-z0-9+/=]+)"', page)}
 
 
 def test_class_report_histogram_most_failed_table_and_scatter(class_dir):
@@ -141,7 +141,9 @@ def test_student_report_lists_tests_with_pictures_and_escapes_output(class_dir, 
     page = write_student_report(source, tmp_path / "other.html",
                                 figures={"grid.touching": {"kind": "omitted", "reason": "too large"},
                                          "Title of contacts.circle": {"kind": "pairs", "aabbs": "junk"}}).read_text()
-    assert "no picture: too large" in page and "no picture (" in page and "<img" not in page
+    # The same words as the student's feedback page (results_model.picture_html).
+    assert "No picture of the failing case: too large." in page and "could not be drawn (" in page
+    assert "<img" not in page
 
 
 def test_student_report_of_results_written_by_the_grader(tmp_path):

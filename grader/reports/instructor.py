@@ -31,7 +31,7 @@ from matplotlib.figure import Figure
 from ..harness.figures import GOT_COLOR, EXPECTED_COLOR, figure_png_base64
 from ..harness.outcome import TestResult
 from ..harness.results_model import SubmissionResults, badge, escaped as _e, html_page, number_or as _number, points
-from ..harness.results_model import status_word, student_text
+from ..harness.results_model import picture_html, status_word, student_text
 from ..sandbox.isolation import isolation_words
 from .results import read_submission_results
 
@@ -54,18 +54,6 @@ def passed(result: TestResult) -> bool:
 
 def _img(data: str, alt: str) -> str:
     return f'<img alt="{_e(alt)}" src="data:image/png;base64,{data}">'
-
-
-def _picture(figure: dict | None, alt: str) -> str:
-    """An inline PNG of a failing case, or a short note why there is none."""
-    if not figure:
-        return ""
-    if figure.get("kind") == "omitted":
-        return f'<p class="muted">no picture: {_e(figure.get("reason", "omitted"))}</p>'
-    try:
-        return _img(figure_png_base64(figure), alt)
-    except Exception as exc:  # a damaged figure must not cost the report
-        return f'<p class="muted">no picture ({_e(type(exc).__name__)}: {_e(exc)})</p>'
 
 
 def _write(path: Path, text: str) -> Path:
@@ -141,7 +129,7 @@ def write_student_report(results_json: SubmissionResults | Path, out_html: Path,
     for test in submission.tests:
         spec = test.test
         figure = figures.get(spec.name, figures.get(spec.title, test.outcome.figure))
-        picture = "" if passed(test) else _picture(figure, f"failing case of {spec.name}")
+        picture = "" if passed(test) else picture_html(figure, f"failing case of {spec.name}")
         body.append(
             f"<tr><td>{_e(spec.title)}<br><code>{_e(spec.name)}</code></td><td>{_e(spec.exercise)}</td>"
             f"<td>{_e(spec.visibility)}</td><td>{badge(test.outcome.status)}</td>"

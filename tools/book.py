@@ -44,6 +44,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from tools.notebook_images import compact_outputs
+
 ROOT = Path(__file__).resolve().parent.parent
 BOOK = ROOT / "book"
 CHAPTERS = BOOK / "chapters"
@@ -173,6 +175,7 @@ def sync(names: list[str] | None = None) -> list[Path]:
     for md in chapter_sources(names):
         start = time.perf_counter()
         nb = execute(read_source(md), md)
+        compact_outputs(nb)   # figures and animation frames as palette PNG: a third of the bytes
         target = md.with_suffix(".ipynb")
         nbformat.validate(nb)
         with open(target, "w", encoding="utf-8") as handle:

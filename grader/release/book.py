@@ -446,14 +446,14 @@ def book_labels(chapters: list[tuple[str, object]], pages: dict[str, str]) -> di
 
 #: An image inlined in HTML (the frames of matplotlib's ``to_jshtml`` animations), whose
 #: base64 is cut into lines by JavaScript line continuations (backslash, newline).
-_INLINE_IMAGE = re.compile(r"(data:image/[\w+.-]+;base64,)((?:[A-Za-z0-9+/=]|\\\n)+)")
+INLINE_IMAGE = re.compile(r"(data:image/[\w+.-]+;base64,)((?:[A-Za-z0-9+/=]|\\\n)+)")
 
 
 def join_inline_images(html_text: str) -> str:
     """``html_text`` with each inlined image's base64 on one line: the same JavaScript
     strings (a line continuation adds nothing to a string), about 15 % fewer bytes in a
     notebook, which stores each line of an output as a JSON string of its own."""
-    return _INLINE_IMAGE.sub(lambda m: m.group(1) + m.group(2).replace("\\\n", ""), html_text)
+    return INLINE_IMAGE.sub(lambda m: m.group(1) + m.group(2).replace("\\\n", ""), html_text)
 
 
 def _rewrite_output(output: dict) -> dict:

@@ -201,3 +201,17 @@ def test_a_symbolic_link_is_never_followed(tmp_path):
     page = (tmp_path / "out" / sim.HTML_NAME).read_text()
     assert "response.momentum_1d: not compared (a symbolic link)" in page
     assert "the instructor" not in page
+
+
+def test_a_copy_hidden_in_an_init_file_is_found(tmp_path):
+    """Every exercise file is the untouched stub; the reference's polygon module sits in
+    ``narrowphase/__init__.py``: the pair with the reference is flagged, and the report
+    names the ``__init__`` functions."""
+    hidden = package_copy(tmp_path / "hidden", REPO / "exercises")
+    init = hidden / "exercises" / "narrowphase" / "__init__.py"
+    copied = (REPO / "solutions" / "narrowphase" / "polygon_polygon.py").read_text()
+    init.write_text(init.read_text() + "\n\n" + copied)
+    flags = sim.find_similar([hidden], tmp_path / "out")
+    assert [frozenset((p.a.id, p.b.id)) for p in flags] == [pair("hidden", "reference")]
+    assert flags[0].a_in_b > 0.95
+    assert "narrowphase.__init__.collide_polygon_polygon" in (tmp_path / "out" / sim.HTML_NAME).read_text()

@@ -37,6 +37,34 @@ def test_no_second_status_table():
     assert not found, f"status tables outside grader/harness/outcome.py (use STATUS_MEANINGS): {found}"
 
 
+def test_no_module_level_status_dict_but_the_one():
+    """A module-level dict named for statuses (``STATUS_WORDS``, ``STATUS_COLORS``...) is a
+    second vocabulary whatever its keys: only outcome.py's STATUS_MEANINGS is one."""
+    found = []
+    for path, tree in sources():
+        for node in tree.body:
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target] \
+                if isinstance(node, ast.AnnAssign) else []
+            for target in targets:
+                value = node.value
+                is_dict = isinstance(value, (ast.Dict, ast.DictComp)) or (
+                    isinstance(value, ast.Call) and isinstance(value.func, ast.Name) and value.func.id == "dict")
+                if isinstance(target, ast.Name) and "STATUS" in target.id.upper() and is_dict \
+                        and path not in VOCABULARY:
+                    found.append(f"{path.relative_to(GRADER)}:{node.lineno} {target.id}")
+    assert not found, f"status dicts outside grader/harness/outcome.py (use STATUS_MEANINGS): {found}"
+
+
+def test_a_failed_call_ends_its_test_with_one_of_the_statuses():
+    """A call's status (the sandbox's vocabulary) is not a test's: student_code.CALL_FAILURES
+    says what each failed call means for its test, for every way a call can fail."""
+    from grader.harness.student_code import CALL_FAILURES
+    from grader.sandbox.process import CALL_STATUSES
+
+    assert set(CALL_FAILURES) == set(CALL_STATUSES) - {"ok"}
+    assert {status for status, _ in CALL_FAILURES.values()} <= set(STATUSES)
+
+
 def test_no_second_style_sheet():
     """CSS rules (``selector { property: value; }``) live in STYLE_SHEET only; a page puts
     that sheet in its ``<style>`` element."""

@@ -30,7 +30,10 @@ _LIVE: "weakref.WeakSet[StudentCode]" = weakref.WeakSet()
 #: The key of a program argument that names a register (worker.Worker.run_program).
 REGISTER = "$register"
 
-STATUS_WORDS = {
+#: How a call that returned no value ends its test: the call's status
+#: (grader.sandbox.process.CALL_STATUSES) -> (the test's status, one of
+#: grader.harness.outcome.STATUSES; what happened to the call, said to the student).
+CALL_FAILURES = {
     "not_implemented": ("not_implemented", "not implemented yet"),
     "import_error": ("error", "your module could not be imported"),
     "missing": ("error", "the function is missing"),
@@ -178,7 +181,7 @@ class StudentCode:
         ``case`` names the input that failed, after what happened."""
         if result.ok:
             return result.value
-        status, words = STATUS_WORDS.get(result.status, ("error", result.status))
+        status, words = CALL_FAILURES.get(result.status, ("error", result.status))
         if result.status == "not_implemented":
             stub = result.message.partition("not implemented yet: ")[2].strip()
             detail = f": {stub}" if stub else ""

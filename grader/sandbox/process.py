@@ -77,6 +77,10 @@ UID_LOCK_PARENTS = ("/run", "/var/run", "/var/lib", "/tmp")
 UID_LOCK_FOLDER = "grader-sandbox-uids"
 #: Statuses a worker may answer with.
 WORKER_STATUSES = ("ok", "not_implemented", "import_error", "missing", "error", "unreadable")
+#: Statuses of a call (CallResult.status): the worker's, and those the parent sees itself.
+#: A call's status is not a test's (grader.harness.outcome.STATUS_MEANINGS): the
+#: harness says what each failed call means for its test.
+CALL_STATUSES = WORKER_STATUSES + ("timeout", "crashed")
 RESPONSE_LIMIT = 16 * 1024 * 1024  # bytes of one JSON response (parsed, it takes about 15 times more)
 TEXT_LIMIT = 20_000  # characters of a worker's message or printed output kept per call
 STDERR_KEPT = 8_000  # characters of the worker's stderr kept for messages

@@ -13,7 +13,8 @@ from pathlib import Path
 import pytest
 
 from grader.harness.run import load_spec, run_tests
-from grader.samples.example_class import EXERCISES_DIR, SOLUTIONS_DIR, BuggySample, Replacement, build_buggy_sample
+from grader.samples.example_class import (EXERCISES_DIR, SOLUTIONS_DIR, BuggySample, Replacement, build_buggy_sample,
+                                          grade_probe)
 
 
 def sandbox_slot() -> int:
@@ -143,9 +144,10 @@ def test_no_library_module_of_the_student_package_chooses_the_reference_face():
         speculative_polygon_manifold(AABB((-5.0, -1.0), (5.0, 0.0)), AABB((-0.5, -0.1), (0.5, 0.9)))
 
 
-#: reference_face_manifold without the check for a repeated point: a zero-size incident
-#: face gives its one point twice.
-MANIFOLD_WITH_REPEATED_POINTS = (Replacement("narrowphase.polygon_polygon", "reference_face_manifold", '''
+#: The reference's reference_face_manifold as a student writes it, with three places to
+#: change: KEPT (the condition on a clipped point), DEPTH (its depth) and UNIQUE (the check
+#: for a point already kept).
+CLIPPING = '''
     def reference_face_manifold(ref_vertices, ref_normal, ref_face, inc_vertices, inc_normals, inc_faces,
                                 ref_name, scale, margin=0.0):
         n = ref_normal
@@ -161,12 +163,24 @@ MANIFOLD_WITH_REPEATED_POINTS = (Replacement("narrowphase.polygon_polygon", "ref
         points, depths, feature_ids = [], [], []
         for point, feature in segment:
             separation = float(n @ (point - v1))
-            if separation <= margin + roundoff:
-                points.append(point - 0.5 * separation * n)
-                depths.append(-separation)
+            midpoint = point - 0.5 * separation * n
+            if KEPT and UNIQUE:
+                points.append(midpoint)
+                depths.append(DEPTH)
                 feature_ids.append(feature)
         return points, depths, feature_ids
-    '''),)
+    '''
+
+
+def clipping(kept: str = "separation <= margin + roundoff", depth: str = "-separation",
+             unique: str = "not any(float(np.max(np.abs(midpoint - q))) <= roundoff for q in points)") -> tuple:
+    source = CLIPPING.replace("KEPT", kept).replace("DEPTH", depth).replace("UNIQUE", unique)
+    return (Replacement("narrowphase.polygon_polygon", "reference_face_manifold", source),)
+
+
+#: reference_face_manifold without the check for a repeated point: a zero-size incident
+#: face gives its one point twice.
+MANIFOLD_WITH_REPEATED_POINTS = clipping(unique="True")
 
 
 def test_a_repeated_contact_point_fails_public_tests_and_is_named(tmp_path):
@@ -178,3 +192,54 @@ def test_a_repeated_contact_point_fails_public_tests_and_is_named(tmp_path):
     assert polygons.score <= polygons.test.points / 2, (polygons.score, polygons.outcome.message[:500])
     for result in (manifold, polygons):
         assert "are the same point" in result.outcome.message, result.outcome.message[:1000]
+
+
+#: Shortcuts a student may take in one function, each a systematic bug of that function:
+#: (the function, "module.qualname" as the probe names it, the rewritten function).
+SYSTEMATIC_BUGS = {
+    # Points above the reference face dropped whatever the margin (the soft step's speculative
+    # points are lost), or kept with their depth clamped at 0 (they count as touching).
+    "manifold-ignores-margin": ("narrowphase.polygon_polygon.reference_face_manifold",
+                                clipping(kept="separation <= roundoff")),
+    "manifold-depth-clamped-at-0": ("narrowphase.polygon_polygon.reference_face_manifold",
+                                    clipping(depth="max(-separation, 0.0)")),
+    # Every row's accumulated impulse clamped at 0, its lower bound ignored: a joint never pulls.
+    "normal-rows-clamped-at-0": ("solver.contact_point.apply_normal_impulse", (Replacement(
+        "solver.contact_point", "apply_normal_impulse", '''
+        def apply_normal_impulse(velocity_a, velocity_b, point, normal_total, target=0.0, mass_scale=1.0,
+                                 impulse_scale=0.0):
+            vxa, vya, wa = velocity_a
+            vxb, vyb, wb = velocity_b
+            nx, ny, rn_a, rn_b, _, _, ima, imb, iia, iib, mass_normal, _, _, lower = point
+            normal_velocity = (vxb - vxa) * nx + (vyb - vya) * ny + wb * rn_b - wa * rn_a
+            change = mass_normal * mass_scale * (target - normal_velocity) - impulse_scale * normal_total
+            new_total = max(normal_total + change, 0.0)
+            change = new_total - normal_total
+            return ((vxa - ima * change * nx, vya - ima * change * ny, wa - iia * rn_a * change),
+                    (vxb + imb * change * nx, vyb + imb * change * ny, wb + iib * rn_b * change), new_total)
+        '''),)),
+}
+
+
+@pytest.fixture(scope="module")
+def reached(tmp_path_factory) -> dict:
+    """Which contacts and sequential tests reach which exercise function (the example
+    class's probe: the reference, each function printing its name when called)."""
+    tests = [t for t in load_spec() if t.exercise in ("contacts", "sequential")]
+    found, results = grade_probe(tests, tmp_path_factory.mktemp("probe"), slot=sandbox_slot())
+    assert all(r.outcome.status == "passed" for r in results)
+    return found
+
+
+@pytest.mark.parametrize("bug", sorted(SYSTEMATIC_BUGS))
+def test_a_systematic_bug_loses_at_least_half_of_its_functions_points(tmp_path, reached, bug):
+    # On main a manifold ignoring the margin or clamping its depths lost 1 of 14 points, a
+    # row clamped at 0 2 of apply_normal_impulse's 8.
+    function, replacements = SYSTEMATIC_BUGS[bug]
+    names = {name for name, functions in reached.items() if functions is None or function in functions}
+    results = graded(tmp_path, replacements, names)
+    at_stake = sum(r.test.points for r in results.values())
+    lost = sum(r.test.points - r.score for r in results.values())
+    assert lost >= at_stake / 2, {name: r.score for name, r in results.items()}
+    public = [r for r in results.values() if r.test.public and r.score < r.test.points]
+    assert public, "a public test must catch it"

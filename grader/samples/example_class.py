@@ -984,6 +984,10 @@ ONE_POINT_MANIFOLD = BuggySample(
         "contacts.reference_face_manifold",
         "contacts.reference_face_rules",
         "contacts.reference_face_edge_cases",
+        # The same with a margin (a crate hovering above the floor keeps one corner), and the
+        # crate landing in the soft step, which then rests on one corner.
+        "contacts.reference_face_manifold_margin",
+        "contacts.landing_crate",
         # The feature-id pairs of polygons face to face get one point (and one id) instead of two.
         "contacts.feature_ids",
     }),

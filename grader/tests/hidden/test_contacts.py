@@ -8,6 +8,12 @@ of touching.  Every returned field is compared
 the docstrings fix them: the reference's ids, except for two circles (no ids promised),
 AABBs touching at a corner (collide_aabb_aabb's id there is not collide_polygon_polygon's)
 and shapes of zero size (two vertices at the same place: either one names the point).
+
+The margin: pairs just apart are clipped as the soft step clips them (the reference's
+choice of face, the student's reference_face_manifold with the margin), and a crate
+lands on the ground in the reference's world stepped in the trusted process, the soft
+step calling the student's reference_face_manifold through the sandbox for every pair
+it clips (``test_landing_crate``).
 """
 from __future__ import annotations
 
@@ -17,22 +23,31 @@ import numpy as np
 import pytest
 
 import solutions.shapes
+from solutions.body import Body
 from solutions.narrowphase.aabb_aabb import collide_aabb_aabb
 from solutions.narrowphase.dispatch import collide
+from solutions.narrowphase.polygon_polygon import (polygon_faces, reference_face_candidates,
+                                                   reference_face_manifold, tolerance_scale)
+from solutions.narrowphase import speculative
+from solutions.narrowphase.speculative import SPECULATIVE_MARGIN
+from solutions.world import World, WorldSettings
 
 from grader.sandbox import codec
-from grader.harness.credit import check_cases
+from grader.harness.compare import as_number, as_vector, show
+from grader.harness.credit import check_cases, fail
 from grader.oracles import narrowphase_cases as cases
 from grader.oracles import plain
 from grader.oracles import random_cases as rc
 from grader.harness.compare import call_text
 from grader.oracles.narrowphase_answers import contact_problem, pair_figure, without_feature_ids
 from grader.oracles.pymunk_geometry import definite_overlap
+from grader.tests.public.test_contacts import manifold_problem
 
 AABBS = "narrowphase.aabb_aabb"
 CIRCLES = "narrowphase.circle_circle"
 CIRCLE_POLYGON = "narrowphase.circle_polygon"
 POLYGONS = "narrowphase.polygon_polygon"
+MANIFOLD = "reference_face_manifold"
 FUNCTIONS = {("Circle", "Circle"): (CIRCLES, "collide_circle_circle"),
              ("Circle", "polygon"): (CIRCLE_POLYGON, "collide_circle_polygon"),
              ("polygon", "polygon"): (POLYGONS, "collide_polygon_polygon")}
@@ -143,21 +158,70 @@ def random_batches() -> dict:
     return out
 
 
+@lru_cache(maxsize=1)
+def near_manifolds(count: int = 240) -> list[tuple]:
+    """Boxes face to face moved apart by 1 to 18 mm, less than the soft step's margin (2 cm),
+    and the clipping the soft step asks of them: (A, B, the arguments of
+    reference_face_manifold for the reference face the reference chooses, with the margin,
+    the reference's answer as [(point, depth, feature id)]); every point is kept with a
+    negative depth."""
+    rng = np.random.default_rng(407)
+    offsets = [(0, 0), (-30, -20), (25, 40), (-80, 60)]
+    out = []
+    for k in range(count):
+        a, b = cases.random_face_face(rng, offset=offsets[k % len(offsets)])
+        gap = float(rng.uniform(0.001, 0.018))
+        contact = collide(reference(a), reference(b))
+        if contact is None:
+            continue
+        b = cases.translated(b, (contact.depth + gap) * contact.normal)
+        polygon_a, polygon_b = polygon_faces(reference(a)), polygon_faces(reference(b))
+        candidates = reference_face_candidates(polygon_a, polygon_b, SPECULATIVE_MARGIN)
+        if not candidates:
+            continue
+        ref_name, _, face, (ref_vertices, ref_normals, ref_faces), incident = candidates[0]
+        normal = ref_normals[int(np.flatnonzero(ref_faces == face)[0])]
+        args = (ref_vertices, normal, face, *incident, ref_name, tolerance_scale(polygon_a[0], polygon_b[0]),
+                SPECULATIVE_MARGIN)
+        points, depths, ids = reference_face_manifold(*args)
+        if points:
+            out.append((a, b, args, [(tuple(p.tolist()), d, i) for p, d, i in zip(points, depths, ids)]))
+    return out
+
+
 @pytest.mark.points(2)
 @pytest.mark.partial_credit
 @pytest.mark.visibility("after_due_date")
 def test_random_against_reference(student):
-    """Contacts: many random pairs of every kind, near and far from the origin"""
+    """Contacts: many random pairs of every kind, near and far from the origin, and pairs just apart (the margin)"""
     everything = []
     for (module, function), batch in random_batches().items():
         answers = student.call_many(module, function, [(a, b) for a, b, _, _ in batch])
         everything += [(function, case, got) for case, got in zip(batch, answers)]
+    near = near_manifolds()
+    answers = student.call_many(POLYGONS, "reference_face_manifold", [args for _, _, args, _ in near])
+    everything += [(MANIFOLD, case, got) for case, got in zip(near, answers)]
 
-    check_cases(everything, lambda item: contact_problem(item[2], item[1][2]), "random pairs of every kind",
-                category=lambda item: item[0],
-                describe=lambda item: call_text(item[0], item[1][0], item[1][1]),
-                figure_of=lambda item: pair_figure(item[1][0], item[1][1], f"{item[0]}: random pair", item[1][2],
-                                                   item[2]))
+    def problem_of(item):
+        function, case, got = item
+        if function != MANIFOLD:
+            return contact_problem(got, case[2])
+        problem = manifold_problem(got, case[3])
+        return None if problem is None else (f"{problem} [shapes apart by less than the soft step's margin, "
+                                             f"{SPECULATIVE_MARGIN:g} m: each point is kept, its depth negative]")
+
+    def describe(item):
+        function, case, _ = item
+        if function != MANIFOLD:
+            return call_text(function, case[0], case[1])
+        return (f"reference_face_manifold(..., ref_name={case[2][6]!r}, margin={case[2][8]:g}) as the soft step "
+                f"calls it for the shapes {call_text('', case[0], case[1])}")
+
+    check_cases(everything, problem_of, "random pairs of every kind", category=lambda item: item[0],
+                describe=describe,
+                figure_of=lambda item: pair_figure(item[1][0], item[1][1], f"{item[0]}: random pair",
+                                                   None if item[0] == MANIFOLD else item[1][2],
+                                                   None if item[0] == MANIFOLD else item[2]))
 
 
 @pytest.mark.points(1)
@@ -221,3 +285,91 @@ def test_reference_face_edge_cases(student):
     """Contacts: the reference face when A's manifold is empty, roundoff allowances 1e6 m from the origin"""
     batch = [(a, b, reference_contact(a, b), note) for a, b, note in EDGE_CASES]
     check_contacts(student, POLYGONS, "collide_polygon_polygon", batch, "reference face edge cases")
+
+
+# A world stepped with the student's clipping ------------------------------------------------------
+LANDING_STEPS, LANDING_DT, LANDING_SUBSTEPS = 90, 1 / 60, 4
+#: Metres and radians: a manifold right to rounding keeps the crate within 1e-13 of the
+#: reference's path (measured with noise of 1e-14 on every point and depth); one that drops
+#: the speculative points or clamps their depths at 0 strays by 1 to 4 cm.
+LANDING_TOLERANCE = 1e-6
+LANDING = "a crate landing on the ground, stepped with your reference_face_manifold"
+
+
+def landing_crate(steps: int = LANDING_STEPS) -> np.ndarray:
+    """A 1 x 0.5 m crate dropped from 0.4 m, turned by 0.25 rad, onto static ground, both
+    convex polygons (so the soft step clips them with reference_face_manifold and its
+    margin), stepped by the reference's world with the soft step: (x, y, angle) per step."""
+    ground = Body.polygon([(-4, -1), (4, -1), (4, 0), (-4, 0)], is_static=True, friction=0.6)
+    crate = Body.polygon([(-0.5, -0.25), (0.5, -0.25), (0.5, 0.25), (-0.5, 0.25)], position=(0.3, 0.9), angle=0.25,
+                         friction=0.6)
+    world = World([ground, crate], WorldSettings(soft_step=True, substeps=LANDING_SUBSTEPS))
+    path = []
+    for _ in range(steps):
+        world.step(LANDING_DT)
+        path.append([float(crate.position[0]), float(crate.position[1]), float(crate.angle)])
+    return np.array(path)
+
+
+@lru_cache(maxsize=1)
+def reference_landing() -> np.ndarray:
+    return landing_crate()
+
+
+def as_feature_id(value):
+    """A feature id back from plain data: lists become tuples (the solver matches ids as keys)."""
+    return tuple(as_feature_id(v) for v in value) if isinstance(value, list) else value
+
+
+def student_clipping(student, calls: list):
+    """reference_face_manifold for the soft step: the student's, called through the sandbox;
+    each call's arguments and answer are appended to ``calls``."""
+    def clipping(*args):
+        got = student.call(POLYGONS, "reference_face_manifold", *args)
+        calls.append((args, got))
+        shaped = isinstance(got, list) and len(got) == 3 and all(isinstance(part, list) for part in got)
+        points = [as_vector(p, 2) for p in got[0]] if shaped else []
+        depths = [as_number(d) for d in got[1]] if shaped else []
+        if not (shaped and len(got[0]) == len(got[1]) == len(got[2]) <= 2
+                and all(v is not None and np.all(np.isfinite(v)) for v in points)
+                and all(d is not None and np.isfinite(d) for d in depths)):
+            fail(f"{LANDING}: reference_face_manifold must return (points, depths, feature_ids), at most two finite "
+                 f"points and a finite depth each, got {show(got)[:300]}")
+        try:
+            ids = [as_feature_id(i) for i in got[2]]
+            hash(tuple(ids))
+        except TypeError:
+            fail(f"{LANDING}: feature ids must be ints, strings or tuples of them, got {show(got[2])[:300]}")
+        return points, [float(d) for d in depths], ids
+    return clipping
+
+
+def first_wrong_clipping(calls: list) -> str:
+    """The first call of the student's clipping whose answer is not the reference's, said."""
+    for args, got in calls:
+        points, depths, ids = reference_face_manifold(*args)
+        problem = manifold_problem(got, [(tuple(p.tolist()), d, i) for p, d, i in zip(points, depths, ids)])
+        if problem is not None:
+            return (f"the first clipping that differs: reference_face_manifold(ref_vertices="
+                    f"{show(np.asarray(args[0]).tolist())}, ref_normal={show(np.asarray(args[1]).tolist())}, "
+                    f"ref_face={args[2]}, inc_vertices={show(np.asarray(args[3]).tolist())}, ..., "
+                    f"margin={args[8]:g}): {problem}")
+    return "every clipping matched the reference's to 1e-9"
+
+
+@pytest.mark.points(4)
+@pytest.mark.visibility("after_due_date")
+@pytest.mark.title("Contacts: a crate landing on the ground, stepped with your clipping (the soft step's margin)")
+def test_landing_crate(student, monkeypatch):
+    calls: list = []
+    monkeypatch.setattr(speculative, "reference_face_manifold", student_clipping(student, calls))
+    path = landing_crate()
+    want = reference_landing()
+    apart = np.abs(path - want).max(axis=1)
+    if not np.all(np.isfinite(path)) or apart.max() > LANDING_TOLERANCE:
+        step = int(np.argmax(~np.isfinite(path).all(axis=1) | (apart > LANDING_TOLERANCE)))
+        fail(f"{LANDING}: at step {step + 1} of {LANDING_STEPS} the crate is at (x, y, angle) = "
+             f"{show(path[step].tolist())} where the reference's clipping puts it at {show(want[step].tolist())} "
+             f"(tolerance {LANDING_TOLERANCE:g}); after {LANDING_STEPS} steps {show(path[-1].tolist())} against "
+             f"{show(want[-1].tolist())}. The soft step asks for every point up to {SPECULATIVE_MARGIN:g} m above the "
+             f"reference face, with its negative depth; {first_wrong_clipping(calls)}")

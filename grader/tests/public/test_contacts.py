@@ -532,7 +532,7 @@ def manifold_problem(got, want: list) -> str | None:
     return None
 
 
-@pytest.mark.points(1)
+@pytest.mark.points(2)
 def test_reference_face_manifold(student):
     """Clipping the incident face against a reference face"""
     cases = MANIFOLD_CASES + MARGIN_CASES
@@ -547,6 +547,80 @@ def test_reference_face_manifold(student):
                                        f"inc_vertices={show([list(v) for v in case[0][3]])}, (its normals and faces), "
                                        f"ref_name={case[0][4]!r}, scale={show(case[0][5])}"
                                        + "".join(f", margin={show(m)}" for m in case[0][7:]) + ")"))
+
+
+#: The margin at every scale: (reference vertices, reference normal, face, incident vertices,
+#: ref_name, expected [(point, depth, feature id)], margin), by hand at 1 m; the floor's face 2
+#: (y = 0, normal (0, 1)) or a square's face 1 (x = 1).  Points up to ``margin`` above the
+#: face are kept with their negative depth; points beyond it are dropped.
+MARGIN_SHAPES = [
+    # A crate hovering 1 cm above the floor, margin 2 cm: both corners, depth -0.01.
+    (FLOOR, (0, 1), 2, [(-0.5, 0.01), (0.5, 0.01), (0.5, 1), (-0.5, 1)], "A",
+     [((-0.5, 0.005), -0.01, ("A", 2, 0, 0)), ((0.5, 0.005), -0.01, ("A", 2, 0, 1))], 0.02),
+    # The same crate, margin 5 mm: nothing.
+    (FLOOR, (0, 1), 2, [(-0.5, 0.01), (0.5, 0.01), (0.5, 1), (-0.5, 1)], "A", [], 0.005),
+    # Tilted: one corner 0.2 m deep, the other 1 cm above (kept), then 5 cm above (dropped).
+    (FLOOR, (0, 1), 2, [(-0.5, -0.2), (0.5, 0.01), (0.5, 1.2), (-0.5, 1.2)], "A",
+     [((-0.5, -0.1), 0.2, ("A", 2, 0, 0)), ((0.5, 0.005), -0.01, ("A", 2, 0, 1))], 0.02),
+    (FLOOR, (0, 1), 2, [(-0.5, -0.2), (0.5, 0.05), (0.5, 1.2), (-0.5, 1.2)], "A",
+     [((-0.5, -0.1), 0.2, ("A", 2, 0, 0))], 0.02),
+    # Tilted and apart: one corner 5 mm above (kept, depth -0.005), the other 3 cm (dropped).
+    (FLOOR, (0, 1), 2, [(-0.5, 0.005), (0.5, 0.03), (0.5, 1.03), (-0.5, 1.005)], "A",
+     [((-0.5, 0.0025), -0.005, ("A", 2, 0, 0))], 0.02),
+    # Wider than the floor, 1 cm above: both ends cut by the side planes x = -1 and x = 1.
+    (FLOOR, (0, 1), 2, [(-2, 0.01), (3, 0.01), (3, 1), (-2, 1)], "A",
+     [((-1, 0.005), -0.01, ("A", 2, 0, 0)), ((1, 0.005), -0.01, ("A", 2, 0, 1))], 0.02),
+    # B holds the reference face (x = 1), the other box 1.5 cm to its right: its face 3.
+    ([(-1, -1), (1, -1), (1, 1), (-1, 1)], (1, 0), 1, [(1.015, -0.5), (2, -0.5), (2, 0.5), (1.015, 0.5)], "B",
+     [((1.0075, 0.5), -0.015, ("B", 1, 3, 3)), ((1.0075, -0.5), -0.015, ("B", 1, 3, 0))], 0.02),
+]
+#: Sizes (m per m of the cases above), each with a turn (rad) and a shift (m): a margin
+#: proportional to the shapes must keep the same points wherever they are.
+MARGIN_SCALES = [(0.01, 0.0, (0.0, 0.0)), (1.0, 0.4, (-3.0, 2.0)), (100.0, -1.1, (250.0, -40.0))]
+
+
+def moved_margin_cases() -> list[tuple]:
+    """MARGIN_SHAPES at each of MARGIN_SCALES: every length times the size, then turned and
+    shifted (the points with the shapes; depths, margin and the roundoff scale only scaled)."""
+    out = []
+    for size, angle, shift in MARGIN_SCALES:
+        turn = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
+        place = [turn * size, np.asarray(shift, dtype=float)]      # x -> size R x + shift
+        for ref, normal, face, incident, name, want, margin in MARGIN_SHAPES:
+            out.append((placed(ref, *place), turn @ np.asarray(normal, dtype=float), face, placed(incident, *place),
+                        name, size * 5.0 + float(np.abs(shift).max()),
+                        [(tuple(placed([point], *place)[0]), size * depth, feature) for point, depth, feature in want],
+                        size * margin, size))
+    return out
+
+
+def placed(points, linear: np.ndarray, shift: np.ndarray) -> list[np.ndarray]:
+    return [linear @ np.asarray(p, dtype=float) + shift for p in points]
+
+
+@pytest.mark.points(3)
+def test_reference_face_manifold_margin(student):
+    """Clipping with a margin: points up to the margin above the reference face, shapes from 1 cm to 100 m"""
+    cases = moved_margin_cases()
+    calls = [(np.asarray(ref, dtype=float), normal, face, *box_faces(incident), name, scale, margin)
+             for ref, normal, face, incident, name, scale, _, margin, _ in cases]
+    answers = student.call_many(POLYGONS, "reference_face_manifold", calls)
+
+    def problem_of(case):
+        (_, _, _, _, _, _, want, margin, size), got = case
+        problem = manifold_problem(got, want)
+        if problem is None:
+            return None
+        return (f"{problem} [shapes {size:g} times those of the worked cases, margin {margin:g} m: a point up to "
+                f"the margin above the reference face is kept, with a negative depth]")
+
+    check_cases(zip(cases, answers), problem_of, "reference faces with a margin",
+                category=lambda case: f"{case[0][8]:g} m shapes",
+                describe=lambda case: (f"reference_face_manifold(ref_vertices={show([list(v) for v in case[0][0]])}, "
+                                       f"ref_normal={show(list(case[0][1]))}, ref_face={case[0][2]}, "
+                                       f"inc_vertices={show([list(v) for v in case[0][3]])}, (its normals and faces), "
+                                       f"ref_name={case[0][4]!r}, scale={show(case[0][5])}, "
+                                       f"margin={show(case[0][7])})"))
 
 
 # Feature ids, worked out by hand ------------------------------------------------------------------

@@ -76,6 +76,7 @@ EXERCISES: dict[str, str | dict[str, str]] = {
     "response/momentum_1d.py": "momentum",
     "broadphase/uniform_grid.py": "grid",
     "broadphase/quadtree.py": "quadtree",
+    "broadphase/dynamic_tree.py": "dynamic_tree",
     "narrowphase/projection.py": "sat",
     "narrowphase/aabb_aabb.py": {"aabbs_overlap": "sat", "collide_aabb_aabb": "contacts"},
     "narrowphase/circle_circle.py": {"circles_overlap": "sat", "collide_circle_circle": "contacts"},

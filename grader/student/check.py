@@ -13,7 +13,9 @@ In a shell::
 
 Each public test of the exercise runs in the sandboxed worker (:mod:`grader.harness.run`),
 and each is shown with pass or fail, its points, and what was expected against what
-came back.  A failing geometric case comes with a picture (:mod:`grader.harness.figures`):
+came back.  The results are the grader's one result model
+(:class:`~grader.harness.results_model.SubmissionResults`, made as the grading process
+makes it); the shell's table and the notebook's are views of it.  A failing geometric case comes with a picture (:mod:`grader.harness.figures`):
 inline in a notebook, saved as a PNG whose path is printed in a shell.  A function
 still raising ``NotImplementedError`` reads "not implemented yet".  The shell
 command exits with 0 when every test passed, 1 when one did not, and 2 when it could
@@ -35,11 +37,12 @@ import shutil
 import sys
 import tempfile
 import textwrap
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..harness.outcome import Outcome, TestResult, status_of
-from ..harness.results_model import STYLE_SHEET, SubmissionResults, badge, points
+from ..harness.outcome import TestResult, status_of
+from ..harness.results_model import STYLE_SHEET, SubmissionResults, badge, picture_html, points
 from ..harness.package import COURSE_ROOT as REPO_ROOT
 from ..harness.package import PACKAGE_VARIABLE, PackageNotFound, find_package
 from ..harness.spec import EXERCISES, TestSpec
@@ -56,97 +59,68 @@ class CheckError(ValueError):
     """``grader check`` cannot run: the message says why and what to do instead."""
 
 
-@dataclass
-class CheckRow:
-    """One test as the student sees it.
-
-    ``score`` and ``points`` are in points; ``seconds`` is the test's wall-clock time;
-    ``figure`` the plain-data picture of a failing case (None if there is none) and
-    ``figure_path`` where it was saved (shell only).
-    """
-
-    name: str
-    title: str
-    exercise: str
-    status: str
-    score: float
-    points: float
-    message: str
-    seconds: float = 0.0
-    figure: dict | None = None
-    figure_path: Path | None = None
-    metrics: dict = field(default_factory=dict)
-    #: What the student's code printed during the test (capped).
-    output: str = ""
-
-    @property
-    def passed(self) -> bool:
-        return self.status == "passed"
-
-    def spec(self) -> TestSpec:
-        return TestSpec(name=self.name, exercise=self.exercise, title=self.title, points=self.points,
-                        visibility="visible")
-
-    def outcome(self) -> Outcome:
-        return Outcome(self.status, message=self.message, figure=self.figure, metrics=self.metrics,
-                       output=self.output)
-
-    @property
-    def label(self) -> str:
-        return status_of(self.status).label
+def no_results() -> SubmissionResults:
+    """The results before any test ran."""
+    return SubmissionResults([], 0.0, 0.0)
 
 
 @dataclass
 class CheckReport:
-    """The outcome of ``check``: one row per public test, and a readable rendering.
+    """The outcome of ``check``: the public tests' results, and readable renderings of them.
 
     In a notebook the report draws itself as an HTML table (``_repr_html_``); ``str``
-    gives the plain-text table of the shell.
+    gives the plain-text table of the shell.  Both are views of ``results``, one row
+    per test (:attr:`rows`).
     """
 
     exercise: str | None
     package: Path
-    rows: list[CheckRow]
-    results: list = field(default_factory=list, repr=False)
+    results: SubmissionResults = field(default_factory=no_results, repr=False)
     #: Show what the code printed under passing tests too (failing ones always show it).
     show_output: bool = False
+    #: By test name, where the picture of its failing case was saved (shell only), or
+    #: a sentence saying why it could not be drawn.
+    pictures: dict[str, Path | str] = field(default_factory=dict, repr=False)
     _shown: bool = field(default=False, repr=False)
 
     @property
+    def rows(self) -> list[TestResult]:
+        """One result per public test, in the order they ran."""
+        return self.results.tests
+
+    @property
     def score(self) -> float:
-        return round(sum(r.score for r in self.rows), 6)
+        return self.results.score
 
     @property
     def max_score(self) -> float:
-        return round(sum(r.points for r in self.rows), 6)
+        return self.results.max_score
 
     @property
     def passed(self) -> bool:
         """True when every test passed."""
-        return all(r.passed for r in self.rows)
+        return self.results.passed
 
     @property
     def counts(self) -> dict[str, int]:
-        return self.submission_results().counts()
-
-    def submission_results(self) -> SubmissionResults:
-        """The rows as the grader's one result model (what the table is a view of)."""
-        results = [TestResult(row.spec(), row.outcome(), row.seconds, recorded_score=row.score) for row in self.rows]
-        return SubmissionResults(results, self.score, self.max_score)
+        return self.results.counts()
 
     def summary(self) -> str:
         """One sentence: the points and how many tests ended which way."""
         if not self.rows:
             return "No public tests to run."
-        return (f"{self.submission_results().summary()}. "
-                "These are the public tests; more tests run when your work is graded.")
+        return f"{self.results.summary()}. These are the public tests; more tests run when your work is graded."
+
+    def row_text(self, result: TestResult, color: bool = False, width: int = 100) -> str:
+        """One test as the shell shows it (see :func:`format_row`)."""
+        return format_row(result, color, width, self.show_output, self.pictures.get(result.test.name))
 
     def text(self, color: bool = False, width: int | None = None) -> str:
         """The plain-text table of the shell command."""
         width = width or shutil.get_terminal_size((100, 24)).columns
         lines = [self.header()]
-        for row in self.rows:
-            lines.append(format_row(row, color, width, self.show_output))
+        for result in self.rows:
+            lines.append(self.row_text(result, color, width))
         lines.append(self.summary())
         return "\n".join(lines)
 
@@ -157,29 +131,22 @@ class CheckReport:
         return f"grader check: {what}, {tests} public tests, package {_shown_path(self.package)}\n"
 
     def html(self) -> str:
-        """A self-contained HTML table (inline styles, figures as inline PNG)."""
-        from ..harness.figures import figure_png_base64  # deferred: matplotlib, heavy to import
-
+        """A self-contained HTML table (the one style sheet, figures as inline PNG)."""
         out = ['<div class="report inline">', f"<style>{STYLE_SHEET}</style>",
                f"<p><b>{html.escape(self.header().strip())}</b></p>",
                "<table>",
                "<thead><tr>" + "".join(f"<th>{h}</th>" for h in ("Result", "Points", "Test",
                                                                 "What happened")) + "</tr></thead>",
                "<tbody>"]
-        for row in self.rows:
-            picture = ""
-            if row.figure is not None and not row.passed:
-                try:
-                    data = figure_png_base64(row.figure)
-                    picture = (f'<br><img alt="picture of the failing case" src="data:image/png;base64,{data}">')
-                except Exception as exc:  # a picture must never hide the message
-                    picture = f"<br><i>(the picture could not be drawn: {html.escape(str(exc))})</i>"
-            message = html.escape(student_message(row, self.show_output))
+        for result in self.rows:
+            test, outcome = result.test, result.outcome
+            picture = "" if result.passed else picture_html(outcome.figure, "picture of the failing case")
+            message = html.escape(student_message(result, self.show_output))
             out.append(
                 "<tr>"
-                f"<td>{badge(row.status, label=True)}</td>"
-                f"<td class='num'>{points(row.score)} / {points(row.points)}</td>"
-                f"<td>{html.escape(row.title)}<br><code>{html.escape(row.name)}</code></td>"
+                f"<td>{badge(outcome.status, label=True)}</td>"
+                f"<td class='num'>{points(result.score)} / {points(test.points)}</td>"
+                f"<td>{html.escape(test.title)}<br><code>{html.escape(test.name)}</code></td>"
                 f"<td><pre>{message}</pre>{picture}</td>"
                 "</tr>")
         out += ["</tbody></table>", f"<p>{html.escape(self.summary())}</p>", "</div>"]
@@ -197,9 +164,28 @@ class CheckReport:
         return f"<CheckReport {what}: {points(self.score)}/{points(self.max_score)} points, " \
                f"{sum(r.passed for r in self.rows)}/{len(self.rows)} tests passed>"
 
+    def save_picture(self, result: TestResult, folder: Path) -> Path | None:
+        """Save a failing test's picture as ``folder/<test name>.png`` (and remove a stale
+        one); return its path, None when there is none (see :attr:`pictures`)."""
+        from ..harness.figures import save_figure  # deferred: matplotlib, heavy to import
+
+        name = result.test.name
+        path = Path(folder) / f"{name}.png"
+        self.pictures.pop(name, None)
+        if result.outcome.figure is None or result.passed:
+            if path.is_file():
+                path.unlink()
+            return None
+        try:
+            self.pictures[name] = save_figure(result.outcome.figure, path)
+        except Exception as exc:  # no picture, but the message still stands
+            self.pictures[name] = f"the picture could not be drawn: {exc}"
+            return None
+        return self.pictures[name]
+
     def save_figures(self, folder: str | Path) -> list[Path]:
         """Save the picture of every failing test as ``folder/<test name>.png``."""
-        return [p for p in (save_row_figure(row, Path(folder)) for row in self.rows) if p is not None]
+        return [p for p in (self.save_picture(result, Path(folder)) for result in self.rows) if p is not None]
 
 
 # Helpers ------------------------------------------------------------------------------
@@ -227,11 +213,12 @@ def command_name(command: str) -> str:
     return f"{'bash run.sh' if in_student_edition() else 'grader'} {command}"
 
 
-def student_message(row: CheckRow, show_output: bool = False) -> str:
-    """The row's message in a student's words (a stub names the function to write), and
+def student_message(result: TestResult, show_output: bool = False) -> str:
+    """The test's message in a student's words (a stub names the function to write), and
     what the code printed when the test did not pass (or ``show_output``)."""
-    message = row.message.strip()
-    if row.status == "not_implemented":
+    outcome = result.outcome
+    message = (outcome.message or "").strip()
+    if outcome.status == "not_implemented":
         match = NOT_IMPLEMENTED.match(message)
         if match and match["stub"]:
             return (f"not implemented yet: write {match['stub']}() in exercises/{match['file']} "
@@ -245,46 +232,33 @@ def student_message(row: CheckRow, show_output: bool = False) -> str:
                     "(it still raises NotImplementedError)")
         return message if "not implemented yet" in message else f"not implemented yet: {message}"
     if not message:
-        message = status_of(row.status).word
-    if row.output.strip() and (show_output or not row.passed):
-        message += "\nyour code printed:\n" + row.output.rstrip()
+        message = status_of(outcome.status).word
+    printed = outcome.output or ""
+    if printed.strip() and (show_output or not result.passed):
+        message += "\nyour code printed:\n" + printed.rstrip()
     return message
 
 
-def format_row(row: CheckRow, color: bool = False, width: int = 100, show_output: bool = False) -> str:
+def format_row(result: TestResult, color: bool = False, width: int = 100, show_output: bool = False,
+               picture: Path | str | None = None) -> str:
     """One test as a block of plain text: label, points, title, then the message (see
-    :func:`student_message` for ``show_output``)."""
-    label = row.label
-    ansi = status_of(row.status).ansi
-    shown_label = f"\033[1;{ansi}m{label:<9}\033[0m" if color else f"{label:<9}"
-    earned = f"{points(row.score)}/{points(row.points)}"
-    lines = [f"{shown_label} {earned:>7}  {row.title}  [{row.name}]"]
+    :func:`student_message` for ``show_output``) and the ``picture`` of its failing case
+    (where it was saved, or why it could not be drawn)."""
+    test, said = result.test, status_of(result.outcome.status)
+    shown_label = f"\033[1;{said.ansi}m{said.label:<9}\033[0m" if color else f"{said.label:<9}"
+    earned = f"{points(result.score)}/{points(test.points)}"
+    lines = [f"{shown_label} {earned:>7}  {test.title}  [{test.name}]"]
     indent = " " * 19
-    body = student_message(row, show_output).splitlines() or [""]
+    body = student_message(result, show_output).splitlines() or [""]
+    if isinstance(picture, str):
+        body.append(f"({picture})")
     for line in body:
         wrapped = textwrap.wrap(line, width=max(40, width - len(indent)), break_long_words=False,
                                 break_on_hyphens=False, replace_whitespace=False) or [""]
         lines += [indent + w for w in wrapped]
-    if row.figure_path is not None:
-        lines.append(f"{indent}picture of the failing case: {row.figure_path}")
+    if isinstance(picture, Path):
+        lines.append(f"{indent}picture of the failing case: {picture}")
     return "\n".join(lines) + "\n"
-
-
-def save_row_figure(row: CheckRow, folder: Path) -> Path | None:
-    """Save a failing row's picture (and remove a stale one); return its path or None."""
-    from ..harness.figures import save_figure  # deferred: matplotlib, heavy to import
-
-    path = Path(folder) / f"{row.name}.png"
-    if row.figure is None or row.passed:
-        if path.is_file():
-            path.unlink()
-        return None
-    try:
-        row.figure_path = save_figure(row.figure, path)
-    except Exception as exc:  # no picture, but the message still stands
-        row.message += f"\n(the picture could not be drawn: {exc})"
-        return None
-    return row.figure_path
 
 
 def default_figures_folder() -> Path:
@@ -316,31 +290,22 @@ def select_tests(exercise: str | None = None) -> list:
     return chosen
 
 
-def row_of(result) -> CheckRow:
-    """A :class:`~grader.harness.run.TestResult` as a row."""
-    test, outcome = result.test, result.outcome
-    return CheckRow(name=test.name, title=test.title, exercise=test.exercise, status=outcome.status,
-                    score=result.score, points=test.points, message=outcome.message or "",
-                    seconds=result.seconds, figure=outcome.figure, metrics=dict(outcome.metrics or {}),
-                    output=outcome.output or "")
+def run_public_tests(tests: list[TestSpec], folder: Path, progress=None) -> SubmissionResults:
+    """Run ``tests`` on the package in ``folder``: the grader's one result model, made as
+    the grading process makes it; ``progress(result)`` after each test."""
+    from ..harness.run import run_tests  # deferred: pytest, heavy to import
+
+    started = time.perf_counter()
+    results = run_tests(folder, tests, reference_dir=None, progress=progress)
+    return SubmissionResults.graded(results, time.perf_counter() - started)
 
 
 def run_check(exercise: str | None = None, package: str | Path | None = None, progress=None) -> CheckReport:
-    """Run the public tests and return the report; ``progress(row)`` after each test."""
-    from ..harness.run import run_tests  # deferred: pytest, heavy to import
-
+    """Run the public tests and return the report; ``progress(result)`` after each test
+    (a :class:`~grader.harness.outcome.TestResult`)."""
     tests = select_tests(exercise)
     folder = find_package(package)
-    rows: list[CheckRow] = []
-
-    def collect(result):
-        row = row_of(result)
-        rows.append(row)
-        if progress is not None:
-            progress(row)
-
-    results = run_tests(folder, tests, reference_dir=None, progress=collect)
-    return CheckReport(exercise, folder, rows, results)
+    return CheckReport(exercise, folder, run_public_tests(tests, folder, progress))
 
 
 def _in_notebook() -> bool:
@@ -362,7 +327,7 @@ def check(exercise: str | None = None, package: str | Path | None = None, show: 
     Parameters
     ----------
     exercise : str, optional
-        ``"grid"``, ``"quadtree"``, ``"sat"``, ``"contacts"``, ``"momentum"``,
+        ``"grid"``, ``"quadtree"``, ``"dynamic_tree"``, ``"sat"``, ``"contacts"``, ``"momentum"``,
         ``"impulse"`` or ``"sequential"`` (or one test's name); None runs every public
         test, in the order of the chapters.
     package : str or Path, optional
@@ -380,7 +345,9 @@ def check(exercise: str | None = None, package: str | Path | None = None, show: 
     Returns
     -------
     CheckReport
-        ``.passed``, ``.score``, ``.max_score``, ``.rows``.
+        ``.passed``, ``.score``, ``.max_score``, ``.rows`` (one
+        :class:`~grader.harness.outcome.TestResult` per test), ``.results`` (the
+        :class:`~grader.harness.results_model.SubmissionResults` they belong to).
 
     Raises
     ------
@@ -439,20 +406,16 @@ def main_check(args: argparse.Namespace) -> int:
     figures = getattr(args, "figures", None)
     figures_folder = Path(figures) if figures else default_figures_folder()
     exercise = getattr(args, "exercise", None)
-    report = CheckReport(exercise, folder, [], show_output=getattr(args, "show_output", False))
+    report = CheckReport(exercise, folder, show_output=getattr(args, "show_output", False))
     print(report.header(len(tests)), file=out, flush=True)
     width = shutil.get_terminal_size((100, 24)).columns
 
-    def show_row(result) -> None:
-        row = row_of(result)
-        save_row_figure(row, figures_folder)
-        report.rows.append(row)
-        print(format_row(row, color, width, report.show_output), file=out, flush=True)
-
-    from ..harness.run import run_tests  # deferred: pytest, heavy to import
+    def show_row(result: TestResult) -> None:
+        report.save_picture(result, figures_folder)
+        print(report.row_text(result, color, width), file=out, flush=True)
 
     try:
-        report.results = run_tests(folder, tests, reference_dir=None, progress=show_row)
+        report.results = run_public_tests(tests, folder, progress=show_row)
     except Exception as exc:
         if os.environ.get("GRADER_DEBUG"):
             raise

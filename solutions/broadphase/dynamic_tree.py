@@ -427,9 +427,9 @@ class DynamicTree:
     def structure(self) -> dict:
         """The tree as plain data (for checks and pictures).
 
-        ``{"margin": float, "nodes": [...], "tight": {body: [4 floats]}}``; nodes in
-        :meth:`nodes` order (the root first), each ``{"box": [4 floats], "height": int,
-        "body": int or None, "parent": index or None, "children": [indices]}``.
+        ``{"margin": float, "nodes": [...]}``; nodes in :meth:`nodes` order (the root
+        first), each ``{"box": [4 floats], "height": int, "body": int or None, "parent":
+        index or None, "children": [indices]}``.
         """
         order = list(self.nodes())
         number = {id(node): k for k, node in enumerate(order)}
@@ -438,8 +438,7 @@ class DynamicTree:
                   "parent": None if node.parent is None else number.get(id(node.parent), -1),
                   "children": [] if node.is_leaf else [number[id(node.child1)], number[id(node.child2)]]}
                  for node in order]
-        return {"margin": self.margin, "nodes": nodes,
-                "tight": {int(body): [float(v) for v in box] for body, box in self.tight.items()}}
+        return {"margin": self.margin, "nodes": nodes}
 
 
 # -------------------------------------------------- the functions the tests call
@@ -504,3 +503,19 @@ def tree_structure(aabbs, margin: float = AABB_MARGIN, removed=(), moves=None) -
     shape = tree.structure()
     shape["cost"] = tree.cost()
     return shape
+
+
+def sibling_choice(aabbs, box, margin: float = AABB_MARGIN) -> dict:
+    """The node :meth:`DynamicTree.best_sibling` chooses for a new leaf with fat box
+    ``box`` (m) in the tree of ``aabbs``: ``{"tree": the tree's structure, "chosen":
+    the chosen node's index in tree["nodes"]}``.
+
+    Examples
+    --------
+    >>> sibling_choice([[0, 0, 1, 1], [5, 0, 6, 1]], [5.5, 0, 6.5, 1], margin=0.0)["chosen"]
+    2
+    """
+    tree = DynamicTree.from_aabbs(aabbs, margin)
+    chosen = tree.best_sibling(tuple(float(v) for v in box))
+    number = next(k for k, node in enumerate(tree.nodes()) if node is chosen)
+    return {"tree": tree.structure(), "chosen": number}

@@ -1,0 +1,244 @@
+"""Dynamic AABB tree (your ``best_sibling``, ``insert_leaf``, ``remove_leaf``, ``move`` and
+``pairs``) against brute-force pairs and the tree's invariants.
+
+The functions called are written for you: ``pairs_dynamic_tree`` (insert every box,
+then your ``pairs``), ``moving_pairs`` (insert, then ``move`` every body frame by frame),
+``tree_structure`` (the tree after inserts, removals and moves, as plain data) and
+``sibling_choice`` (the node your ``best_sibling`` picks).  Expected pairs come from
+:mod:`grader.oracles.brute_force`; the tree is checked by
+:mod:`grader.oracles.aabb_tree_shape`, which never runs your code or the reference's.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from grader.harness.compare import pairs as compare_pairs
+from grader.harness.compare import show
+from grader.harness.credit import fail
+from grader.oracles.aabb_tree_shape import (COST_TOLERANCE, grown, median_split_cost, reinsertions, sibling_costs,
+                                            structure_problem, well_formed)
+from grader.oracles.brute_force import describe_boxes, overlapping_pairs, pairs_figure
+from grader.oracles.random_cases import clustered_aabbs, random_aabbs
+from grader.oracles.scaling import growth_problem
+
+MODULE = "broadphase.dynamic_tree"
+WHO = "your dynamic tree"
+ALGORITHM = ("a dynamic AABB tree (each new leaf's sibling found by descending only into promising subtrees, "
+             "each body's partners by entering only the nodes its box meets)")
+MARGIN = 0.1
+#: A tree may cost at most this many times a top-down median-split tree of the same boxes
+#: (measured: the reference 0.88 to 1.1; pairing every leaf with the root 7 to 14, with the leftmost leaf 5.5 to 8).
+MAX_COST_RATIO = 1.5
+
+
+def check_algorithm(student) -> None:
+    """Fail when building the tree and listing its pairs does the work of a brute force."""
+    problem = growth_problem(student, MODULE, "pairs_dynamic_tree", lambda boxes: (boxes, MARGIN), ALGORITHM,
+                             factor=8, small_scene=1000)
+    if problem is not None:
+        fail(f"{problem} (pairs_dynamic_tree runs your best_sibling, insert_leaf and pairs)")
+
+
+def pairs_text(pairs, limit: int = 10) -> str:
+    pairs = sorted(tuple(p) for p in pairs)
+    text = ", ".join(f"({i}, {j})" for i, j in pairs[:limit])
+    return "{" + text + (", ..." if len(pairs) > limit else "") + "}"
+
+
+def check_pair_scenes(student, scenes: list[tuple[np.ndarray, float]], label: str) -> None:
+    """``pairs_dynamic_tree(boxes, margin)`` equals brute force on every scene (share right on failure)."""
+    check_algorithm(student)
+    answers = student.call_many(MODULE, "pairs_dynamic_tree", scenes)
+    wrong = []
+    for (boxes, margin), answer in zip(scenes, answers):
+        want = overlapping_pairs(boxes)
+        problem, missed, extra = compare_pairs(answer, want)
+        if problem is not None:
+            wrong.append((boxes, margin, want, answer, problem, missed, extra))
+    if wrong:
+        boxes, margin, want, answer, problem, missed, extra = wrong[0]
+        fail(f"{WHO}, {label}: {len(wrong)} of {len(scenes)} scenes wrong. The first: pairs_dynamic_tree("
+             f"aabbs={describe_boxes(boxes)}, margin={margin:g}) should return {pairs_text(want)}, got "
+             f"{show(answer)}: {problem}", fraction=1 - len(wrong) / len(scenes),
+             figure=pairs_figure(boxes, missed, extra, f"pairs_dynamic_tree: {label}"))
+
+
+def moving_scene(rng: np.random.Generator, count: int, frames: int, world: float, step: float) -> np.ndarray:
+    """(frames, count, 4) boxes drifting by up to ``step`` m a frame, some far jumps."""
+    boxes = random_aabbs(rng, count, world=world)
+    velocity = rng.uniform(-step, step, (count, 2))
+    out = [boxes]
+    for _ in range(frames - 1):
+        boxes = boxes + np.tile(velocity, 2)
+        jump = rng.random(count) < 0.05                               # a few teleports
+        boxes[jump] += np.tile(rng.uniform(-world / 2, world / 2, (int(jump.sum()), 2)), 2)
+        out.append(boxes)
+    return np.array(out)
+
+
+def check_moving(student, scenes: list[tuple[np.ndarray, float]], label: str) -> None:
+    """``moving_pairs(frames, margin)``: every frame's pairs are brute force's and exactly the
+    bodies whose tight box left their fat box are reinserted."""
+    answers = student.call_many(MODULE, "moving_pairs", scenes)
+    for (frames, margin), answer in zip(scenes, answers):
+        call = f"moving_pairs({len(frames)} frames of {frames.shape[1]} boxes, margin={margin:g})"
+        if not (isinstance(answer, dict) and isinstance(answer.get("pairs"), list)
+                and isinstance(answer.get("reinserted"), list) and len(answer["pairs"]) == len(frames)
+                and len(answer["reinserted"]) == len(frames)):
+            fail(f"{WHO}, {label}: {call} should return {{'pairs': [...], 'reinserted': [...]}} with one list per "
+                 f"frame, got {show(answer)}")
+        want_moved, _ = reinsertions(frames.tolist(), margin)
+        for frame, boxes in enumerate(frames):
+            want = overlapping_pairs(boxes)
+            problem, missed, extra = compare_pairs(answer["pairs"][frame], want)
+            if problem is not None:
+                fail(f"{WHO}, {label}: {call}, frame {frame}: the pairs should be {pairs_text(want)}, got "
+                     f"{pairs_text(answer['pairs'][frame])}: {problem}",
+                     figure=pairs_figure(boxes, missed, extra, f"moving_pairs: {label}, frame {frame}"))
+            got = answer["reinserted"][frame]
+            if got != want_moved[frame]:
+                fail(f"{WHO}, {label}: {call}, frame {frame}: move should reinsert exactly the bodies whose tight "
+                     f"box left their fat box ({margin:g} m around the tight box when last inserted), "
+                     f"{want_moved[frame][:12]}, but reinserted {show(got)}. A body that stays inside its fat "
+                     "box keeps its leaf (the point of the margin); one that leaves it must be reinserted.")
+
+
+def check_structures(student, cases: list[tuple], label: str) -> None:
+    """``tree_structure(boxes, margin, removed, moves)`` keeps every invariant."""
+    calls = [(boxes, margin, removed, moves) for boxes, margin, removed, moves in cases]
+    answers = student.call_many(MODULE, "tree_structure", calls)
+    for (boxes, margin, removed, moves), answer in zip(cases, answers):
+        tight = {body: box for body, box in enumerate(boxes.tolist()) if body not in set(removed)}
+        fat = {body: grown(box, margin) for body, box in tight.items()}
+        if moves is not None:
+            for body, box in enumerate(moves.tolist()):
+                if body in tight:
+                    _, after = reinsertions([[tight[body]], [box]], margin)   # inserted, then moved once
+                    tight[body], fat[body] = box, after[0]
+        problem = structure_problem(answer, tight, fat)
+        if problem is not None:
+            steps = f"{len(boxes)} boxes inserted" + (f", {len(removed)} removed" if len(removed) else "") + (
+                ", every body moved" if moves is not None else "")
+            fail(f"{WHO}, {label}: tree_structure(aabbs={describe_boxes(boxes)}, margin={margin:g}) [{steps}]: "
+                 f"{problem}")
+
+
+def check_siblings(student, cases: list[tuple], label: str) -> None:
+    """``sibling_choice(boxes, box, margin)`` picks a node of least cost."""
+    answers = student.call_many(MODULE, "sibling_choice", cases)
+    for (boxes, box, margin), answer in zip(cases, answers):
+        tree = answer.get("tree") if isinstance(answer, dict) else None
+        problem = well_formed(tree) or (None if tree["nodes"] else "the tree is empty")
+        chosen = answer.get("chosen") if isinstance(answer, dict) else None
+        if problem is not None or not (isinstance(chosen, int) and 0 <= chosen < len(tree["nodes"])):
+            fail(f"{WHO}, {label}: sibling_choice should return the tree and the index of the chosen node, got "
+                 f"{show(answer)[:300]} ({problem or 'no such node'})")
+        costs = sibling_costs(tree, box)
+        best = min(range(len(costs)), key=costs.__getitem__)
+        if costs[chosen] > costs[best] * (1 + COST_TOLERANCE):
+            node, other = tree["nodes"][chosen], tree["nodes"][best]
+            fail(f"{WHO}, {label}: in the tree of {describe_boxes(boxes)} (margin {margin:g}), best_sibling"
+                 f"({show(list(box))}) chose the node with box {node['box']} (body {node['body']}), which would add "
+                 f"{costs[chosen]:.6g} m of inner perimeter; the node with box {other['box']} (body {other['body']})"
+                 f" adds only {costs[best]:.6g} m (its new parent's perimeter plus its ancestors' growth).")
+
+
+def check_quality(student, scenes: list[tuple[np.ndarray, str]], label: str) -> None:
+    """The tree's cost stays within MAX_COST_RATIO of a median-split tree's."""
+    answers = student.call_many(MODULE, "tree_structure", [(boxes, MARGIN) for boxes, _ in scenes])
+    for (boxes, note), answer in zip(scenes, answers):
+        cost = answer.get("cost") if isinstance(answer, dict) else None
+        yardstick = median_split_cost(boxes.tolist(), MARGIN)
+        if not isinstance(cost, (int, float)) or not cost <= MAX_COST_RATIO * yardstick:
+            fail(f"{WHO}, {label} ({note}, {len(boxes)} boxes): the tree's cost (total perimeter of the inner "
+                 f"nodes) is {show(cost)} m, more than {MAX_COST_RATIO:g} times the {yardstick:.5g} m of a tree "
+                 "split top-down at medians: each new leaf should go where it adds the least perimeter "
+                 "(best_sibling), and rotations keep the tree from growing lopsided.")
+
+
+# Special cases, with the pairs derived by hand (index pairs i < j).
+SPECIAL_CASES = [
+    ("no box", np.zeros((0, 4)), 0.1, []),
+    ("one box", [[1, 1, 2, 3]], 0.1, []),
+    ("two boxes touching along an edge", [[0, 0, 1, 1], [1, 0.5, 2, 2]], 0.1, [(0, 1)]),
+    ("two boxes touching at a corner, margin 0", [[0, 0, 1, 1], [1, 1, 2, 2]], 0.0, [(0, 1)]),
+    ("fat boxes overlap, tight boxes 0.15 m apart", [[0, 0, 1, 1], [1.15, 0, 2, 1]], 0.1, []),
+    ("a zero-size box inside another and one on its edge", [[0, 0, 2, 2], [1, 1, 1, 1], [2, 0.5, 2, 0.5]], 0.1,
+     [(0, 1), (0, 2)]),
+    ("two zero-size boxes at one point", [[3, 3, 3, 3], [3, 3, 3, 3], [3.2, 3, 3.2, 3]], 0.1, [(0, 1)]),
+    ("five equal boxes", [[0, 0, 1, 1]] * 5, 0.1, [(i, j) for i in range(5) for j in range(i + 1, 5)]),
+    ("boxes at negative coordinates", [[-1, -1, 0, 0], [-0.5, -0.5, -0.25, -0.25], [0, 0, 1, 1]], 0.1,
+     [(0, 1), (0, 2)]),
+]
+
+
+@pytest.mark.points(3)
+@pytest.mark.partial_credit
+@pytest.mark.title("Dynamic tree: pairs of random and clustered boxes")
+def test_random(student):
+    rng = np.random.default_rng(301)
+    scenes = [(random_aabbs(rng, 80, world=25.0) if k % 3 else clustered_aabbs(rng, 80), (0.1, 0.0, 0.5)[k % 3])
+              for k in range(18)]
+    check_pair_scenes(student, scenes, "random boxes")
+
+
+@pytest.mark.points(2)
+@pytest.mark.title("Dynamic tree: touching, zero-size and equal boxes")
+def test_special_cases(student):
+    cases = [(np.asarray(boxes, dtype=float).reshape(-1, 4), margin) for _, boxes, margin, _ in SPECIAL_CASES]
+    answers = student.call_many(MODULE, "pairs_dynamic_tree", cases)
+    for (name, _, margin, want), (boxes, _), answer in zip(SPECIAL_CASES, cases, answers):
+        problem, missed, extra = compare_pairs(answer, set(want))
+        if problem is not None:
+            fail(f"{WHO}, {name}: pairs_dynamic_tree(aabbs={describe_boxes(boxes)}, margin={margin:g}) should "
+                 f"return {pairs_text(want)} (tight boxes overlapping or touching), got {show(answer)}: {problem}",
+                 figure=pairs_figure(boxes, missed, extra, f"pairs_dynamic_tree: {name}"))
+
+
+@pytest.mark.points(2)
+@pytest.mark.title("Dynamic tree: moving boxes, pairs and reinsertions frame by frame")
+def test_moving(student):
+    rng = np.random.default_rng(302)
+    scenes = [(moving_scene(rng, 40, 8, 12.0, step), margin) for step, margin in
+              ((0.03, 0.1), (0.08, 0.1), (0.2, 0.1), (0.05, 0.0), (0.05, 0.3))]
+    check_moving(student, scenes, "boxes drifting, a few jumping")
+
+
+@pytest.mark.points(2)
+@pytest.mark.title("Dynamic tree: the tree after inserts, removals and moves keeps every invariant")
+def test_structure(student):
+    rng = np.random.default_rng(303)
+    cases = [(np.array([[0, 0, 1, 1]], dtype=float), 0.1, [], None),
+             (np.array([[0, 0, 1, 1], [3, 0, 4, 1], [0, 3, 1, 4]], dtype=float), 0.1, [1], None),
+             (np.array([[0, 0, 1, 1], [3, 0, 4, 1]], dtype=float), 0.1, [0, 1], None)]
+    for k in range(5):
+        boxes = random_aabbs(rng, 40, world=15.0)
+        removed = rng.choice(40, 10, replace=False).tolist() if k % 2 else []
+        moves = boxes + np.tile(rng.uniform(-0.15, 0.15, (40, 2)), 2) if k >= 2 else None
+        cases.append((boxes, MARGIN, removed, moves))
+    check_structures(student, cases, "small trees")
+
+
+@pytest.mark.points(2)
+@pytest.mark.title("Dynamic tree: best_sibling picks a node of least cost")
+def test_best_sibling(student):
+    rng = np.random.default_rng(304)
+    cases = [(np.array([[0, 0, 1, 1], [1, 0, 2, 1], [10, 0, 11, 1]], dtype=float), [10.5, 0.5, 11.5, 1.0], 0.0),
+             (np.array([[0, 0, 1, 1], [1, 0, 2, 1], [10, 0, 11, 1]], dtype=float), [-50, -50, 50, 50], 0.0)]
+    for _ in range(12):
+        boxes = random_aabbs(rng, int(rng.integers(5, 60)), world=20.0)
+        centre = rng.uniform(-12, 12, 2)
+        half = rng.uniform(0.05, 3.0, 2)
+        cases.append((boxes, [*(centre - half), *(centre + half)], MARGIN))
+    check_siblings(student, cases, "random trees")
+
+
+@pytest.mark.points(1)
+@pytest.mark.title("Dynamic tree: the tree's cost stays near a well-built tree's")
+def test_quality(student):
+    rng = np.random.default_rng(305)
+    boxes = random_aabbs(rng, 400, world=2 * math.sqrt(400))
+    check_quality(student, [(boxes, "random order"), (clustered_aabbs(rng, 400), "clustered")], "tree quality")

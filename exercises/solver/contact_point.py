@@ -101,8 +101,9 @@ def apply_normal_impulse(velocity_a, velocity_b, point: ContactPoint, normal_tot
     >>> apply_normal_impulse((0.0, 0.0, 0.0), (0.0, -2.0, 0.0), point, 0.0)
     ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 2.0)
 
-    A later visit that finds the disc moving away at 1 m/s takes impulse back, but only
-    down to a total of 0: a contact never pulls.
+    A later visit that finds the disc moving away at 3 m/s would take 3 N s back to stop
+    it, but the total holds only 2 N s and is clamped at 0 (a contact never pulls): the
+    disc keeps 1 m/s of its separating speed.
 
     >>> apply_normal_impulse((0.0, 0.0, 0.0), (0.0, 3.0, 0.0), point, 2.0)
     ((0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.0)

@@ -11,6 +11,9 @@ centre of mass (the body's ``position``).  Units: kg, kg m^2, m, rad, m/s, rad/s
 - ``is_bullet=True`` asks the world for continuous detection against static bodies.
 - ``restitution`` e in [0, 1] and ``friction`` mu >= 0; a pair combines them as
   products (as pymunk does): e = e_A e_B, mu = mu_A mu_B.
+
+Every one of these may be set after the body is in a world (``box.friction = 0``): the
+setters write the body's row of the world's state, which every stage of the step reads.
 """
 from __future__ import annotations
 
@@ -18,7 +21,8 @@ import math
 
 import numpy as np
 
-from .body_state import BodyState
+from .body_state import (EXTENT_X, EXTENT_Y, FRICTION, INERTIA, INVERSE_INERTIA, INVERSE_MASS, MASS, RESTITUTION,
+                         BodyState)
 from .shapes import AABB, OBB, Circle, ConvexPolygon, Shape, as_length, polygon_centroid
 from .vector import rotation_matrix
 
@@ -44,11 +48,29 @@ def moment_of_inertia(shape_local: Shape, mass: float) -> float:
     return mass * float(np.sum(cr * terms)) / (6.0 * area2)
 
 
+def as_shape(value) -> Shape:
+    """``value`` if it is a shape (:data:`~exercises.shapes.Shape`); TypeError otherwise."""
+    if not isinstance(value, (Circle, AABB, OBB, ConvexPolygon)):
+        raise TypeError(f"a body's shape must be a Circle, AABB, OBB or ConvexPolygon, got {type(value).__name__}")
+    return value
+
+
+def shape_extents(shape_local: Shape) -> tuple[float, float]:
+    """Half the width and height (m) of a shape in its own frame: a box's half-extents
+    (an OBB's along its axes), a disc's radius twice, half a polygon's bounding box."""
+    if isinstance(shape_local, Circle):
+        return shape_local.radius, shape_local.radius
+    if isinstance(shape_local, (AABB, OBB)):
+        return float(shape_local.half_extents[0]), float(shape_local.half_extents[1])
+    half = np.ptp(shape_local.vertices, axis=0) / 2
+    return float(half[0]), float(half[1])
+
+
 class Body:
     """A rigid body; see the module docstring for units and conventions.
 
-    Its pose and velocities live in one row (its slot) of a
-    :class:`~exercises.body_state.BodyState`: its own until a
+    Its pose, velocities, mass, inertia, material and extents live in one row (its
+    slot) of a :class:`~exercises.body_state.BodyState`: its own until a
     :class:`~exercises.world.World` gathers it into the world's state.  Reading
     ``position`` or ``velocity`` gives a copy of the row (what the body was doing
     then); assigning them, ``body.velocity = v`` or ``body.velocity += dv``, writes the
@@ -59,11 +81,6 @@ class Body:
                  velocity=(0.0, 0.0), angular_velocity: float = 0.0, restitution: float = 0.0,
                  friction: float = 0.0, is_static: bool = False, fixed_rotation: bool = False,
                  is_bullet: bool = False, name: str = ""):
-        self.shape = shape
-        self.mass = mass
-        self.is_static = is_static
-        self.fixed_rotation = fixed_rotation
-        self.is_bullet = is_bullet
         self.name = name
         position = np.array(position, dtype=float).reshape(2)
         velocity = np.array(velocity, dtype=float).reshape(2)
@@ -73,23 +90,143 @@ class Body:
         angle, angular_velocity = float(angle), float(angular_velocity)
         if not (math.isfinite(angle) and math.isfinite(angular_velocity)):
             raise ValueError("body angle and angular_velocity must be finite")
-        if not self.is_static:
-            self.mass = as_length("body mass", self.mass)
-            if self.mass == 0:
-                raise ValueError("a dynamic body needs a mass > 0 (use is_static=True for an immovable one)")
-        self.restitution = as_length("restitution", restitution)
-        self.friction = as_length("friction", friction)
-        if isinstance(self.shape, AABB):
-            self.fixed_rotation = True
-        self.inertia = math.inf if (self.is_static or self.fixed_rotation) else moment_of_inertia(self.shape, self.mass)
         self.bind(BodyState(1), 0)
+        # What the mass properties are made from (_write_mass_properties): the flags,
+        # the shape, the mass and an inertia set by hand (None: the shape's).
+        self._is_static, self._fixed_rotation, self._is_bullet = bool(is_static), bool(fixed_rotation), bool(is_bullet)
+        self._shape, self._inertia_set = as_shape(shape), None
+        self._write_extents()
+        self.mass = mass
+        self.restitution = restitution
+        self.friction = friction
         self.position, self.angle, self.velocity, self.angular_velocity = position, angle, velocity, angular_velocity
-        self._state.dynamic[0], self._state.turning[0] = not self.is_static, self.inverse_inertia > 0.0
 
     def bind(self, state: BodyState, slot: int) -> None:
-        """Make row ``slot`` of ``state`` this body's pose and velocity (the row must
-        already hold them: :meth:`BodyState.gather` fills it first)."""
+        """Make row ``slot`` of ``state`` this body's pose, velocity and properties (the
+        row must already hold them: :meth:`BodyState.gather` fills it first)."""
         self._state, self._slot = state, slot
+
+    def property_row(self) -> np.ndarray:
+        """A copy of the body's row of :attr:`BodyState.properties` (columns as named there)."""
+        return self._state.properties[self._slot].copy()
+
+    # Mass, material, shape and flags: the body's row of its state, written by the setters.
+    @property
+    def mass(self) -> float:
+        """Mass (kg).  Setting it keeps the inertia the shape gives that mass (or the
+        one set by hand); a static body keeps an inverse mass of 0."""
+        return float(self._state.properties[self._slot, MASS])
+
+    @mass.setter
+    def mass(self, value: float) -> None:
+        mass = float(value) if self._is_static else as_length("body mass", value)
+        if mass == 0 and not self._is_static:
+            raise ValueError("a dynamic body needs a mass > 0 (use is_static=True for an immovable one)")
+        self._state.properties[self._slot, MASS] = mass
+        self._write_mass_properties()
+
+    @property
+    def inertia(self) -> float:
+        """Moment of inertia about the centre of mass (kg m^2): the shape's for the
+        body's mass (:func:`moment_of_inertia`) unless set by hand; inf for a static
+        body or a fixed rotation.  Setting it (> 0; inf: the body cannot turn) keeps
+        that value through later changes of mass or shape."""
+        return float(self._state.properties[self._slot, INERTIA])
+
+    @inertia.setter
+    def inertia(self, value: float) -> None:
+        inertia = as_length("body inertia", value) if value != math.inf else math.inf
+        if inertia == 0:
+            raise ValueError("a body's inertia must be > 0 (inf: it cannot turn)")
+        self._inertia_set = inertia
+        self._write_mass_properties()
+
+    @property
+    def friction(self) -> float:
+        """Friction coefficient mu >= 0 (a pair's is the product of its bodies')."""
+        return float(self._state.properties[self._slot, FRICTION])
+
+    @friction.setter
+    def friction(self, value: float) -> None:
+        self._state.properties[self._slot, FRICTION] = as_length("friction", value)
+
+    @property
+    def restitution(self) -> float:
+        """Restitution e >= 0 (a pair's is the product of its bodies')."""
+        return float(self._state.properties[self._slot, RESTITUTION])
+
+    @restitution.setter
+    def restitution(self, value: float) -> None:
+        self._state.properties[self._slot, RESTITUTION] = as_length("restitution", value)
+
+    @property
+    def shape(self) -> Shape:
+        """The collision shape in the body's frame (centred on the centre of mass).
+        Setting it writes the extents and (unless set by hand) the inertia."""
+        return self._shape
+
+    @shape.setter
+    def shape(self, value: Shape) -> None:
+        self._shape = as_shape(value)
+        self._write_extents()
+        self._write_mass_properties()
+        self._state.changes += 1
+
+    @property
+    def is_static(self) -> bool:
+        """Infinite mass: the solver never moves the body."""
+        return self._is_static
+
+    @is_static.setter
+    def is_static(self, value: bool) -> None:
+        if not value and self._is_static:       # the mass it had as a static body must do now
+            mass = as_length("body mass", self.mass)
+            if mass == 0:
+                raise ValueError("a dynamic body needs a mass > 0: set its mass first")
+        self._is_static = bool(value)
+        self._write_mass_properties()
+        self._state.changes += 1
+
+    @property
+    def fixed_rotation(self) -> bool:
+        """The body cannot turn (infinite inertia); always True for an AABB shape."""
+        return self._fixed_rotation or isinstance(self._shape, AABB)
+
+    @fixed_rotation.setter
+    def fixed_rotation(self, value: bool) -> None:
+        self._fixed_rotation = bool(value)
+        self._write_mass_properties()
+
+    @property
+    def is_bullet(self) -> bool:
+        """The world sweeps the body against static ones (continuous detection)."""
+        return self._is_bullet
+
+    @is_bullet.setter
+    def is_bullet(self, value: bool) -> None:
+        self._is_bullet = bool(value)
+        self._state.changes += 1
+
+    def _write_mass_properties(self) -> None:
+        """The row's inverse mass, inertia and inverse inertia, and the flags ``dynamic``
+        and ``turning``, from the mass, the flags, the shape and a hand-set inertia.  A
+        body that stops turning stops its angular velocity (the solver never gives it one)."""
+        row, slot, state = self._state.properties[self._slot], self._slot, self._state
+        mass = row[MASS]
+        if self._is_static or self.fixed_rotation:
+            inertia = math.inf
+        else:
+            inertia = self._inertia_set if self._inertia_set is not None else moment_of_inertia(self._shape, mass)
+        row[INVERSE_MASS] = 0.0 if self._is_static else 1.0 / mass
+        row[INERTIA] = inertia
+        row[INVERSE_INERTIA] = 0.0 if math.isinf(inertia) else 1.0 / inertia
+        if state.turning[slot] and not row[INVERSE_INERTIA] > 0.0:
+            state.velocity[slot, 2] = 0.0
+        state.dynamic[slot], state.turning[slot] = not self._is_static, row[INVERSE_INERTIA] > 0.0
+
+    def _write_extents(self) -> None:
+        """The row's extents: half the width and height of the shape in the body's frame."""
+        self._state.properties[self._slot, EXTENT_X:EXTENT_Y + 1] = shape_extents(self._shape)
 
     # Pose and velocities: the body's row of its state, given out as copies.
     @property
@@ -100,6 +237,8 @@ class Body:
     @position.setter
     def position(self, value) -> None:
         self._state.position[self._slot] = value
+        if self._is_static:
+            self._state.changes += 1
 
     @property
     def angle(self) -> float:
@@ -109,6 +248,8 @@ class Body:
     @angle.setter
     def angle(self, value: float) -> None:
         self._state.angle[self._slot] = value
+        if self._is_static:
+            self._state.changes += 1
 
     @property
     def velocity(self) -> np.ndarray:
@@ -155,12 +296,12 @@ class Body:
     @property
     def inverse_mass(self) -> float:
         """1/m (1/kg); 0 for a static body."""
-        return 0.0 if self.is_static else 1.0 / self.mass
+        return float(self._state.properties[self._slot, INVERSE_MASS])
 
     @property
     def inverse_inertia(self) -> float:
         """1/I (1/(kg m^2)); 0 for a static body or a fixed rotation."""
-        return 0.0 if math.isinf(self.inertia) else 1.0 / self.inertia
+        return float(self._state.properties[self._slot, INVERSE_INERTIA])
 
     def world_shape(self) -> Shape:
         """The body's shape placed at its current position and angle (world frame)."""

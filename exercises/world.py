@@ -217,17 +217,32 @@ class World:
         #: The soft step compiled whole (``response/soft_step_numba.py`` of the instructor's edition), for a
         #: world of boxes or of discs with ``backend="numba"``; None where the readable stages run.
         self.compiled_soft_step = None
+        self.stats = StepStats()
+        self._static_shapes: dict[int, Shape] = {}
+        self.look_again()
+
+    def look_again(self) -> None:
+        """Forget what the world keeps about its bodies between steps, and choose again
+        whether the compiled soft step can run it: after a body's shape, its static or
+        bullet flag or a static body's pose changed (``state.changes`` counts those;
+        :meth:`step` calls this when it grows).  Masses and materials need nothing:
+        every step reads them from the state."""
+        self._changes_seen = self.state.changes
+        self._static_shapes.clear()
+        compiled = None
         if self.settings.backend == "numba" and self.settings.soft_step:
-            from .response.soft_step_numba import CompiledSoftStep
+            from .response.soft_step_numba import CompiledSoftStep  # deferred: compiles numba on first use
 
             if CompiledSoftStep.supports(self):
-                self.compiled_soft_step = compiled = CompiledSoftStep(self.bodies, self.joints)
+                compiled = self.compiled_soft_step
+                circles = bool(self.bodies) and isinstance(self.bodies[0].shape, Circle)
+                if compiled is None or compiled.circles != circles:
+                    compiled = CompiledSoftStep(self.bodies, self.joints)
                 # After each compiled step, contacts and figures are made when first read.
                 self._compiled_world_recipes = {"_manifolds": compiled.contacts, "_stats": self._compiled_stats}
                 self._compiled_solver_recipes = {"_stats": compiled.solver_stats,
                                                  "_contact_impulses": compiled.contact_impulses}
-        self.stats = StepStats()
-        self._static_shapes: dict[int, Shape] = {}
+        self.compiled_soft_step = compiled
 
     # The algorithm --------------------------------------------------------------
     def step(self, dt: float) -> None:
@@ -238,6 +253,8 @@ class World:
             raise ValueError(f"the world was made with {len(self.state)} bodies and now lists {len(self.bodies)}: "
                              "bodies cannot be added or removed; make a new World with the new list")
         h = dt / self.settings.substeps
+        if self.state.changes != self._changes_seen:
+            self.look_again()
         if self.compiled_soft_step is not None:        # the same soft step, compiled whole
             self.compiled_step(h)
             return

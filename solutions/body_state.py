@@ -1,11 +1,13 @@
-"""The one body state: poses and velocities of a world's bodies as arrays.
+"""The one body state: poses, velocities, masses, materials and sizes of a world's bodies as arrays.
 
-A :class:`~solutions.body.Body` does not hold its own position or velocity: it is a
-handle on one row (its *slot*) of a :class:`BodyState`.  A body made on its own gets a
+A :class:`~solutions.body.Body` does not hold its own position, velocity, mass or
+friction: it is a handle on one row (its *slot*) of a :class:`BodyState`, whose
+properties read the row and whose setters write it (as pymunk's write its C struct).  A body made on its own gets a
 state of one row; a :class:`~solutions.world.World` gathers its bodies into one state
 of ``n`` rows and binds each body to its row, so that every stage of the step (and the
-compiled twins) reads and writes the same arrays, and ``body.position`` always says
-where the world has put the body.  Nothing is copied between stages.
+compiled twins) reads and writes the same arrays, every step: ``body.position`` always
+says where the world has put the body, and ``body.friction = 0`` set after the world
+was made is what the next step uses.  Nothing is copied between stages.
 
 Arrays (row ``k`` is the body in slot ``k``):
 
@@ -13,7 +15,14 @@ Arrays (row ``k`` is the body in slot ``k``):
 - ``angle`` (n,): rad, counter-clockwise;
 - ``velocity`` (n, 3): rows ``(vx, vy, w)`` in m/s and rad/s;
 - ``dynamic`` (n,): the body moves (not static);
-- ``turning`` (n,): the body turns (finite inertia).
+- ``turning`` (n,): the body turns (finite inertia);
+- ``properties`` (n, ``PROPERTY_COUNT``): one row of numbers per body, columns
+  ``EXTENT_X``, ``EXTENT_Y``: half the width and height of its shape in its own frame
+  (m: a box's half-extents, a disc's radius twice, a polygon's local bounding box);
+  ``INVERSE_MASS`` (1/kg, 0 for a static body), ``INVERSE_INERTIA`` (1/(kg m^2), 0
+  for a body that cannot turn), ``FRICTION``, ``RESTITUTION``, ``MASS`` (kg) and
+  ``INERTIA`` (kg m^2, inf for a body that cannot turn).  One array, so that the
+  compiled step takes them as one argument.
 
 >>> state = BodyState(2)
 >>> state.position[1] = (3.0, 4.0)
@@ -24,9 +33,13 @@ from __future__ import annotations
 
 import numpy as np
 
+#: Columns of :attr:`BodyState.properties` (module docstring).
+EXTENT_X, EXTENT_Y, INVERSE_MASS, INVERSE_INERTIA, FRICTION, RESTITUTION, MASS, INERTIA = range(8)
+PROPERTY_COUNT = 8
+
 
 class BodyState:
-    """Poses and velocities of ``n`` bodies (module docstring)."""
+    """Poses, velocities and properties of ``n`` bodies (module docstring)."""
 
     def __init__(self, n: int):
         self.position = np.zeros((n, 2))
@@ -34,20 +47,26 @@ class BodyState:
         self.velocity = np.zeros((n, 3))
         self.dynamic = np.zeros(n, dtype=bool)
         self.turning = np.zeros(n, dtype=bool)
+        self.properties = np.zeros((n, PROPERTY_COUNT))
+        #: Counts the changes a world keeps something for (its static bodies' world
+        #: shapes, its choice of compiled step): a shape replaced, a static or bullet
+        #: flag switched, a static body moved.  The world looks again when it grows.
+        self.changes = 0
 
     def __len__(self) -> int:
         return len(self.angle)
 
     @classmethod
     def gather(cls, bodies) -> "BodyState":
-        """One state holding every body's pose and velocity, each body bound to its
-        row (slot ``k`` for ``bodies[k]``); a body bound before (on its own or in
-        another world) moves here with its current values."""
+        """One state holding every body's pose, velocity and properties, each body
+        bound to its row (slot ``k`` for ``bodies[k]``); a body bound before (on its
+        own or in another world) moves here with its current values."""
         state = cls(len(bodies))
         for slot, body in enumerate(bodies):
             state.position[slot] = body.position
             state.angle[slot] = body.angle
             state.velocity[slot, :2] = body.velocity
+            state.properties[slot] = body.property_row()
             state.dynamic[slot] = not body.is_static
             state.turning[slot] = body.inverse_inertia > 0.0
             # A body that cannot turn has no angular velocity (the solver never gives it one).

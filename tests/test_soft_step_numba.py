@@ -311,7 +311,8 @@ def test_the_compiled_step_holds_no_reference_to_its_arrays_after_a_step():
     world = scene.build_world(replace(scene.recommended_settings(), backend="numba"))
     world.step(scene.dt)
     step, state = world.compiled_soft_step, world.state
-    arrays = [state.position, state.angle, state.velocity, state.dynamic, state.turning, step.ints, step.floats]
+    arrays = [state.position, state.angle, state.velocity, state.dynamic, state.turning, state.properties, step.ints,
+              step.floats]
     before = [sys.getrefcount(array) for array in arrays]
     for _ in range(20):
         world.step(scene.dt)

@@ -55,6 +55,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..body_state import EXTENT_X, EXTENT_Y, FRICTION, INVERSE_INERTIA, INVERSE_MASS, RESTITUTION
 from ..contact import Contact
 from ..broadphase.grid_numba import (DENSE_STRIPS_PER_ENTRY, _check_and_measure, _counting_sort_pairs, _grid_pairs,
                                       _grown, _strips)
@@ -88,8 +89,6 @@ from ..no_alias_compiler import NoAliasCompiler
 STRIP_GRID_MIN_BODIES = 64
 #: Up to this many values, the candidate pairs' sorts are insertion sorts.
 INSERTION_SORT_MAX = 64
-#: Columns of the bodies' constant array (one row per body).
-BODY_HALF_X, BODY_HALF_Y, BODY_INVERSE_MASS, BODY_INVERSE_INERTIA, BODY_FRICTION, BODY_RESTITUTION = range(6)
 #: Columns of the contact points' integer array: pair key ``i * n + j``, feature id, bodies.
 POINT_PAIR, POINT_FEATURE, POINT_A, POINT_B = range(4)
 #: Columns of their float array: point (m), normal, signed separation at the start of the
@@ -141,9 +140,11 @@ def _layout(bodies, joints, capacity):
 
     - ``ints``: the header, ``switches`` (``SWITCH_*``), ``figures`` (``FIGURE_*``), the
       joints' integers (3, joints), the two point buffers (2, 2 * capacity, 4), the work space;
-    - ``floats``: ``parameters`` (``PARAMETER_*``), the bodies' constants (bodies, 6), the
-      joints' (joints, 7), their impulses (joints), the two point buffers
-      (2, 2 * capacity, 7), the work space.
+    - ``floats``: ``parameters`` (``PARAMETER_*``), the joints' constants (joints, 7),
+      their impulses (joints), the two point buffers (2, 2 * capacity, 7), the work space.
+
+    (The bodies' masses, materials and extents are not here: the step reads them from
+    the world's :class:`~solutions.body_state.BodyState` every step.)
     """
     work_ints, work_floats = _work_sizes(bodies, joints, capacity)
     switches = HEADER_COUNT
@@ -151,13 +152,12 @@ def _layout(bodies, joints, capacity):
     joint_ints = figures + FIGURE_COUNT
     memory_ints = joint_ints + 3 * joints
     work = memory_ints + 2 * 2 * capacity * 4
-    body_floats = PARAMETER_COUNT
-    joint_floats = body_floats + 6 * bodies
+    joint_floats = PARAMETER_COUNT
     impulses = joint_floats + 7 * joints
     memory_floats = impulses + joints
     work_space = memory_floats + 2 * 2 * capacity * 7
     return (switches, figures, joint_ints, memory_ints, work, work + work_ints,
-            body_floats, joint_floats, impulses, memory_floats, work_space, work_space + work_floats)
+            joint_floats, impulses, memory_floats, work_space, work_space + work_floats)
 
 
 @njit(cache=True)
@@ -659,11 +659,13 @@ def _zero_static_velocities(velocity, static_members):
 
 
 @njit(cache=True)
-def _soft_step(position, angle, velocity, dynamic, turning, ints, floats):
+def _soft_step(position, angle, velocity, dynamic, turning, properties, ints, floats):
     """One soft step of the world (module docstring) on its state (``position`` to
-    ``turning``) with the sections of ``ints`` and ``floats`` (:func:`_layout`):
-    ``parameters`` and ``switches`` (``PARAMETER_*``, ``SWITCH_*``), the bodies' and
-    joints' constants (``BODY_*``, ``JOINT_*``), the joints' impulses.  The contact
+    ``properties``: the bodies' extents, inverse masses and inertias, friction and
+    restitution, read every step, columns as :mod:`~solutions.body_state` names them)
+    with the sections of ``ints`` and ``floats`` (:func:`_layout`): ``parameters`` and
+    ``switches`` (``PARAMETER_*``, ``SWITCH_*``), the joints' constants (``JOINT_*``)
+    and impulses.  The contact
     points (``POINT_*``) live in two buffers, ``memory_*[0]`` and ``memory_*[1]``, of
     ``2 * capacity`` points each: the step reads the last step's from the one ``figures``
     names and writes its own into the other, then updates ``figures`` (``FIGURE_*``).
@@ -674,27 +676,27 @@ def _soft_step(position, angle, velocity, dynamic, turning, ints, floats):
     # allocates, here; fewer bodies are swept in _step_on_pairs, without allocating.
     if angle.shape[0] < STRIP_GRID_MIN_BODIES:
         none = ints[:0]
-        return _step_on_pairs(none, none, none, position, angle, velocity, dynamic, turning, ints, floats)
-    switches, _, joint_ints, _, _, parameters, bodies, _, _, _, work_floats = _sections(angle.shape[0], ints, floats)
-    _, aabb = _faces_and_aabbs(position, angle, bodies[:, 0:2], parameters[PARAMETER_MARGIN],
+        return _step_on_pairs(none, none, none, position, angle, velocity, dynamic, turning, properties, ints,
+                              floats)
+    switches, _, joint_ints, _, _, parameters, _, _, _, work_floats = _sections(angle.shape[0], ints, floats)
+    _, aabb = _faces_and_aabbs(position, angle, properties[:, EXTENT_X:EXTENT_Y + 1], parameters[PARAMETER_MARGIN],
                                switches[SWITCH_CIRCLES] != 0, switches[SWITCH_CORNER_ROUNDING], work_floats)
     keys, key_i, key_j = _candidate_pairs(aabb, dynamic, joint_ints[JOINT_PAIRS])
-    return _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turning, ints, floats)
+    return _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turning, properties, ints, floats)
 
 
 @njit(cache=True, inline="always")
 def _sections(n, ints, floats):
     """The sections of ``ints`` and ``floats`` (:func:`_layout`) as arrays: switches,
-    figures, joint integers, point buffers, work space; parameters, bodies' constants,
-    joint floats, joint impulses, point buffers, work space."""
+    figures, joint integers, point buffers, work space; parameters, joint floats, joint
+    impulses, point buffers, work space."""
     joints, capacity = ints[HEADER_JOINTS], ints[HEADER_CAPACITY]
-    (switches_at, figures_at, joint_ints_at, memory_ints_at, work_ints_at, ints_end, bodies_at, joint_floats_at,
+    (switches_at, figures_at, joint_ints_at, memory_ints_at, work_ints_at, ints_end, joint_floats_at,
      impulses_at, memory_floats_at, work_floats_at, floats_end) = _layout(n, joints, capacity)
     return (ints[switches_at:figures_at], ints[figures_at:joint_ints_at],
             ints[joint_ints_at:memory_ints_at].reshape((3, joints)),
             ints[memory_ints_at:work_ints_at].reshape((2, 2 * capacity, 4)), ints[work_ints_at:ints_end],
-            floats[:bodies_at], floats[bodies_at:joint_floats_at].reshape((n, 6)),
-            floats[joint_floats_at:impulses_at].reshape((joints, 7)), floats[impulses_at:memory_floats_at],
+            floats[:joint_floats_at], floats[joint_floats_at:impulses_at].reshape((joints, 7)), floats[impulses_at:memory_floats_at],
             floats[memory_floats_at:work_floats_at].reshape((2, 2 * capacity, 7)), floats[work_floats_at:floats_end])
 
 
@@ -706,12 +708,12 @@ def _sections(n, ints, floats):
 #: of one, and the caller holds the arguments for the whole call.  Its arguments are
 #: distinct arrays, which LLVM is told (:class:`~solutions.no_alias_compiler.NoAliasCompiler`).
 @njit(cache=True, _nrt=False, pipeline_class=NoAliasCompiler)
-def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turning, ints, floats):
+def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turning, properties, ints, floats):
     """The rest of :func:`_soft_step` from the candidate pairs ``keys`` (``i * n + j``),
     ``key_i`` and ``key_j``: manifolds, prestep, sub-steps, restitution, memory.  For
     fewer than ``STRIP_GRID_MIN_BODIES`` bodies the pairs come empty and are found here
     (:func:`_few_candidate_pairs`)."""
-    (switches, figures, joint_ints, memory_ints, work_ints, parameters, bodies, joint_floats, joint_impulses,
+    (switches, figures, joint_ints, memory_ints, work_ints, parameters, joint_floats, joint_impulses,
      memory_floats, work_floats) = _sections(angle.shape[0], ints, floats)
     dt_ratio, h = parameters[PARAMETER_DT_RATIO], parameters[PARAMETER_H]
     gravity_x, gravity_y = parameters[PARAMETER_GRAVITY_X], parameters[PARAMETER_GRAVITY_Y]
@@ -728,8 +730,9 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turni
     last = figures[FIGURE_MEMORY]
     old_ints, old_floats = memory_ints[last, :figures[FIGURE_POINTS]], memory_floats[last, :figures[FIGURE_POINTS]]
     n = angle.shape[0]
-    half, inverse_mass, inverse_inertia = bodies[:, 0:2], bodies[:, BODY_INVERSE_MASS], bodies[:, BODY_INVERSE_INERTIA]
-    friction_of, restitution_of = bodies[:, BODY_FRICTION], bodies[:, BODY_RESTITUTION]
+    half = properties[:, EXTENT_X:EXTENT_Y + 1]
+    inverse_mass, inverse_inertia = properties[:, INVERSE_MASS], properties[:, INVERSE_INERTIA]
+    friction_of, restitution_of = properties[:, FRICTION], properties[:, RESTITUTION]
     old_key, old_feature = old_ints[:, POINT_PAIR], old_ints[:, POINT_FEATURE]
     old_x, old_y = old_floats[:, POINT_X], old_floats[:, POINT_Y]
     old_normal, old_tangent = old_floats[:, POINT_NORMAL_IMPULSE], old_floats[:, POINT_TANGENT_IMPULSE]
@@ -1044,12 +1047,12 @@ class CompiledSoftStep:
 
     Holds two arrays, ``ints`` and ``floats``, whose sections (:func:`_layout`) are also
     its attributes: the settings (``parameters``, ``switches``), the step's ``figures``,
-    the bodies' constants (``bodies``: half-extents or radius, inverse masses and
-    inertias, friction, restitution; columns ``BODY_*``), the joints (``joint_ints``,
-    ``joint_floats``) with their last impulses, two buffers of contact points
+    the joints (``joint_ints``, ``joint_floats``) with their last impulses, two buffers of contact points
     (``memory_ints``, ``memory_floats``; columns ``POINT_*``): the last step's, which are
     also the next step's warm start, and the next step's; and the step's work space.
-    The buffers are made for up to ``capacity`` candidate pairs.
+    The buffers are made for up to ``capacity`` candidate pairs.  The bodies' masses,
+    materials and extents are not copied: each step reads them from the world's
+    :class:`~solutions.body_state.BodyState` (``properties``), where ``Body`` setters write.
     """
 
     #: Candidate pairs the buffers are made for at first; a step that finds more makes
@@ -1058,9 +1061,6 @@ class CompiledSoftStep:
 
     def __init__(self, bodies, joints=()):
         self.circles = bool(bodies) and isinstance(bodies[0].shape, Circle)
-        size = [[body.shape.radius, 0.0] if self.circles else list(body.shape.half_extents) for body in bodies]
-        constants = np.array([[*half, body.inverse_mass, body.inverse_inertia, body.friction, body.restitution]
-                              for half, body in zip(size, bodies)], dtype=float).reshape(-1, 6)
         self.body_count = n = len(bodies)
         self.joint_count = len(joints)
         joined = np.unique(np.array([min(j.a, j.b) * n + max(j.a, j.b) for j in joints], dtype=np.int64))
@@ -1070,7 +1070,7 @@ class CompiledSoftStep:
         joint_ints[JOINT_PAIRS, :len(joined)] = joined
         joint_floats = np.array([[*joint.anchor_a, *joint.anchor_b, joint.length, joint.frequency,
                                   joint.damping_ratio] for joint in joints], dtype=float).reshape(-1, 7)
-        self._constants = constants, joint_ints, joint_floats
+        self._constants = joint_ints, joint_floats
         self.reset()
 
     @staticmethod
@@ -1091,7 +1091,7 @@ class CompiledSoftStep:
         """Forget last step's impulses."""
         self.ints = self.floats = None
         self.make_buffers(self.INITIAL_PAIR_CAPACITY)
-        self.bodies[:], self.joint_ints[:], self.joint_floats[:] = self._constants
+        self.joint_ints[:], self.joint_floats[:] = self._constants
         self.previous_h = None
         self._settings_key = None
 
@@ -1110,7 +1110,7 @@ class CompiledSoftStep:
             self._settings_key = key
         while True:
             needed = _soft_step(state.position, state.angle, state.velocity, state.dynamic, state.turning,
-                                self.ints, self.floats)
+                                state.properties, self.ints, self.floats)
             if not needed:
                 break
             self.make_buffers(2 * needed)        # nothing changed: step again
@@ -1119,7 +1119,7 @@ class CompiledSoftStep:
     def make_buffers(self, capacity: int) -> None:
         """``ints`` and ``floats`` (:func:`_layout`) for ``capacity`` candidate pairs (up to
         ``2 * capacity`` points), everything but the work space kept: the settings, the
-        figures, the constants, the joints' impulses and the last step's points (which
+        figures, the joints' constants and impulses and the last step's points (which
         must fit); and each section as an attribute (a view)."""
         held = self.ints is not None
         if held and not 2 * capacity >= self.figures[FIGURE_POINTS]:
@@ -1127,22 +1127,22 @@ class CompiledSoftStep:
                              f"{self.figures[FIGURE_POINTS]} points")
         n, joints = self.body_count, self.joint_count
         layout = _layout(n, joints, capacity)
-        ints, floats = np.zeros(layout[5], np.int64), np.zeros(layout[11])
+        ints, floats = np.zeros(layout[5], np.int64), np.zeros(layout[10])
         ints[HEADER_JOINTS], ints[HEADER_CAPACITY] = joints, capacity
         if held:
             points = min(self.memory_ints.shape[1], 2 * capacity)
             old_ints, old_floats, old_points = self.ints, self.floats, (self.memory_ints, self.memory_floats)
             old_layout = _layout(n, joints, self.capacity)
             ints[HEADER_COUNT:layout[3]] = old_ints[HEADER_COUNT:old_layout[3]]        # up to the point buffers
-            floats[:layout[9]] = old_floats[:old_layout[9]]
-        (switches, figures, joint_ints, memory_ints, work_ints, ints_end, bodies, joint_floats, impulses,
+            floats[:layout[8]] = old_floats[:old_layout[8]]
+        (switches, figures, joint_ints, memory_ints, work_ints, ints_end, joint_floats, impulses,
          memory_floats, work_floats, floats_end) = layout
         self.ints, self.floats, self.capacity = ints, floats, capacity
         self.switches, self.figures = ints[switches:figures], ints[figures:joint_ints]
         self.joint_ints = ints[joint_ints:memory_ints].reshape(3, joints)
         self.memory_ints = ints[memory_ints:work_ints].reshape(2, 2 * capacity, 4)
         self.work_ints = ints[work_ints:ints_end]
-        self.parameters, self.bodies = floats[:bodies], floats[bodies:joint_floats].reshape(n, 6)
+        self.parameters = floats[:joint_floats]
         self.joint_floats = floats[joint_floats:impulses].reshape(joints, 7)
         self.joint_impulses = floats[impulses:memory_floats]
         self.memory_floats = floats[memory_floats:work_floats].reshape(2, 2 * capacity, 7)

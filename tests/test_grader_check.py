@@ -10,6 +10,7 @@ import base64
 import importlib
 import itertools
 import io
+import json
 import re
 import shutil
 import subprocess
@@ -24,7 +25,11 @@ import numpy as np
 import pytest
 
 from grader.harness import figures as grader_figures
+from grader.harness.outcome import Outcome, TestResult
 from grader.harness.package import PackageNotFound, find_package
+from grader.harness.results_model import SubmissionResults
+from grader.harness.spec import TestSpec
+from grader.reports.results import check_results
 from grader.student.check import CheckError, check, main, select_tests
 from grader.harness.figures import EXPECTED_COLOR, EXTRA_COLOR, GOT_COLOR, MISSED_COLOR, draw_figure, figure_png_base64, save_figure
 from matplotlib.patches import Rectangle
@@ -100,13 +105,13 @@ def printing_report(printing_package):
 def test_printed_output_is_capped_and_is_what_the_case_shown_printed(printing_report):
     from grader.harness.outcome import OUTPUT_LINES
 
-    row = next(r for r in printing_report.rows if r.name == "contacts.circle_circle")
-    assert row.status == "failed" and "a small case found by Hypothesis" in row.message
+    row = next(r for r in printing_report.rows if r.test.name == "contacts.circle_circle")
+    assert row.outcome.status == "failed" and "a small case found by Hypothesis" in row.outcome.message
     # The output is the shrunk case's own: its first line names the circles the message shows.
-    first, *rest = row.output.splitlines()
+    first, *rest = row.outcome.output.splitlines()
     numbers = first.split()[1:]
-    circles = re.findall(r"Circle\(center=\(([-\d.e]+), ([-\d.e]+)\), radius=([-\d.e]+)\)", row.message)
-    assert [float(v) for v in numbers] == [float(v) for circle in circles for v in circle], (first, row.message)
+    circles = re.findall(r"Circle\(center=\(([-\d.e]+), ([-\d.e]+)\), radius=([-\d.e]+)\)", row.outcome.message)
+    assert [float(v) for v in numbers] == [float(v) for circle in circles for v in circle], (first, row.outcome.message)
     # One case printed 1 + DEBUG_LINES lines: OUTPUT_LINES are shown, the rest counted.
     printed = first + "\n" + "".join(f"debug step {i}\n" for i in range(DEBUG_LINES))
     shown = "".join(printed.splitlines(keepends=True)[:OUTPUT_LINES])
@@ -117,16 +122,16 @@ def test_printed_output_is_capped_and_is_what_the_case_shown_printed(printing_re
 
 
 def test_a_hypothesis_test_shows_what_its_failing_example_printed(printing_report):
-    row = next(r for r in printing_report.rows if r.name == "contacts.centre_inside")
-    assert row.status == "error" and "a big circle" in row.message
+    row = next(r for r in printing_report.rows if r.test.name == "contacts.centre_inside")
+    assert row.outcome.status == "error" and "a big circle" in row.outcome.message
     # Every example printed a line; only the failing (shrunk) example's is kept.
-    assert row.output.splitlines() == ["radius 0.61"], row.output
-    assert "radius=0.61" in row.message  # the case that raised
+    assert row.outcome.output.splitlines() == ["radius 0.61"], row.outcome.output
+    assert "radius=0.61" in row.outcome.message  # the case that raised
 
 
 def test_output_of_passing_tests_is_shown_on_request_only(printing_package, printing_report, capsys):
-    row = next(r for r in printing_report.rows if r.name == "contacts.clip_segment")
-    assert row.passed and row.output.startswith("CLIP-DEBUG")
+    row = next(r for r in printing_report.rows if r.test.name == "contacts.clip_segment")
+    assert row.passed and row.outcome.output.startswith("CLIP-DEBUG")
     assert "CLIP-DEBUG" not in check_module.format_row(row) and "CLIP-DEBUG" not in printing_report.html()
     assert "CLIP-DEBUG" in check_module.format_row(row, show_output=True)
     arguments = ["contacts.clip_segment", "--package", str(printing_package)]
@@ -135,13 +140,24 @@ def test_output_of_passing_tests_is_shown_on_request_only(printing_package, prin
         " " * 19, "")
 
 
+def test_the_check_table_is_a_view_of_the_one_result_model(printing_report):
+    """grader check's results are the grader's SubmissionResults: written as results.json and
+    read back, they draw the same table (failing, raising and passing tests alike)."""
+    data = json.loads(json.dumps(printing_report.results.to_json()))
+    assert check_results(data) == [] and {t["extra_data"]["status"] for t in data["tests"]} >= {"failed", "error",
+                                                                                                "passed"}
+    again = check_module.CheckReport("contacts", printing_report.package, SubmissionResults.from_json(data))
+    assert again.text(width=100) == printing_report.text(width=100)
+    assert again.summary() == printing_report.summary() and again.score == printing_report.score
+
+
 def test_a_random_case_that_raises_is_named_with_its_input(printing_package):
     report = check("sat.aabbs_overlap", package=printing_package, show=False)
     [row] = report.rows
-    assert row.status == "error" and "too wide" in row.message
+    assert row.outcome.status == "error" and "too wide" in row.outcome.message
     named = re.search(r"on the case aabbs_overlap\(AABB\(min_corner=\(([-\d.e]+), [-\d.e]+\), "
-                      r"max_corner=\(([-\d.e]+), [-\d.e]+\)\)", row.message)
-    assert named, row.message
+                      r"max_corner=\(([-\d.e]+), [-\d.e]+\)\)", row.outcome.message)
+    assert named, row.outcome.message
     assert float(named[2]) - float(named[1]) > 1.5, "the case named is not one that raises"
 
 
@@ -169,22 +185,22 @@ def chapter_order() -> list[str]:
 
 def test_reference_passes_every_public_test_listed_in_chapter_order():
     shown = []  # in the order the shell command prints them, as each test finishes
-    report = check_module.run_check(None, "solutions", progress=lambda row: shown.append(row.name))
+    report = check_module.run_check(None, "solutions", progress=lambda result: shown.append(result.test.name))
     public = [t for t in load_spec() if t.public]
-    assert sorted(r.name for r in report.rows) == sorted(t.name for t in public)
+    assert sorted(r.test.name for r in report.rows) == sorted(t.name for t in public)
     order = chapter_order()
     assert len(order) >= 6 and order[:2] == ["grid", "quadtree"], order
     exercises = [name.split(".")[0] for name in shown]
     assert [name for name, _ in itertools.groupby(exercises)] == [e for e in order if e in exercises], exercises
-    assert [r.name for r in report.rows] == shown
-    assert report.passed, [(r.name, r.message) for r in report.rows if not r.passed]
+    assert [r.test.name for r in report.rows] == shown
+    assert report.passed, [(r.test.name, r.outcome.message) for r in report.rows if not r.passed]
     assert report.score == report.max_score == sum(t.points for t in public)
     assert "all 25 tests passed" in report.summary() or f"all {len(public)} tests passed" in report.summary()
 
 
 def test_stubs_say_not_implemented_yet_and_show_no_traceback():
     report = check(package=REPO / "exercises", show=False)
-    assert report.rows and {r.status for r in report.rows} == {"not_implemented"}
+    assert report.rows and {r.outcome.status for r in report.rows} == {"not_implemented"}
     assert report.score == 0 and not report.passed
     text, page = report.text(), report.html()
     for row in report.rows:
@@ -192,7 +208,7 @@ def test_stubs_say_not_implemented_yet_and_show_no_traceback():
         assert "not implemented yet" in block and "TO DO" in block
         # The message names the stub that raised (which may be a method the tested
         # function calls, as Quadtree.insert for pairs_quadtree) and the file to write it in.
-        stub = row.message.rsplit(": ", 1)[1].split(" in ")[0]
+        stub = row.outcome.message.rsplit(": ", 1)[1].split(" in ")[0]
         assert f"write {stub}()" in block and "exercises/" in block
     for shown in (text, page):
         assert "Traceback" not in shown and 'File "' not in shown
@@ -222,7 +238,7 @@ def test_wrong_normal_is_explained_with_a_picture_in_a_shell(wrong_package, tmp_
 def test_check_outside_a_notebook_prints_the_table_and_returns_an_html_report(wrong_package, tmp_path, capsys):
     report = check("contacts.circle_circle", package=wrong_package, figures=tmp_path)
     out = capsys.readouterr().out
-    assert [r.status for r in report.rows] == ["failed"] and report.score < 2
+    assert [r.outcome.status for r in report.rows] == ["failed"] and report.score < 2
     assert "FAIL" in out and str(tmp_path / "contacts.circle_circle.png") in out
     assert (tmp_path / "contacts.circle_circle.png").stat().st_size > 0
     page = report._repr_html_()
@@ -295,8 +311,8 @@ def test_where_the_package_is_found(monkeypatch, tmp_path, wrong_package):
 
 
 def test_not_implemented_message_names_the_file():
-    row = check_module.CheckRow("t", "T", "grid", "not_implemented", 0, 1,
-                                "broadphase.uniform_grid.pairs_grid_every_cell: not implemented yet")
+    stub = Outcome("not_implemented", message="broadphase.uniform_grid.pairs_grid_every_cell: not implemented yet")
+    row = TestResult(TestSpec("t", "grid", "T", 1.0, "visible"), stub, 0.0)
     assert check_module.student_message(row) == (
         "not implemented yet: write pairs_grid_every_cell() in exercises/broadphase/uniform_grid.py "
         "(it still raises NotImplementedError)")

@@ -120,3 +120,43 @@ def test_results_json_round_trips_through_the_model():
     assert [(r.test.name, r.outcome.status, r.score, r.outcome.message, r.test.visibility) for r in back.tests] == \
         [(r.test.name, r.outcome.status, r.score, r.outcome.message, r.test.visibility) for r in made.tests]
     assert 0 < back.tests[1].score < 3.0 and back.summary() == made.summary()
+
+
+def test_a_test_result_has_one_serialised_form():
+    """A grading worker's event and results.json's ``extra_data`` carry the same form of a
+    test result (TestResult.to_dict), read back by TestResult.from_dict; the batch's
+    parent reads the event into the model the results file is written from."""
+    import json
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    from grader.batch.scheduler import Job, _handle_event
+    from grader.batch.submissions import Submission
+    from grader.harness.outcome import Outcome, TestResult
+    from grader.harness.results_model import result_of_entry, results_entry
+    from grader.harness.spec import TestSpec
+
+    test = TestSpec("contacts.circle", "contacts", "Circles", 2.0, "visible", partial_credit=True)
+    figure = {"kind": "pairs", "title": "t", "cell_size": 1.0, "aabbs": [[0, 0, 1, 1]], "missed": [], "extra": []}
+    result = TestResult(test, Outcome("failed", 0.95, "the normal points from B to A", figure, {"seconds": 0.01},
+                                      "printed\n"), 0.25)
+    event = json.loads(json.dumps({"event": "test", "job": 0, "index": 0, "result": result.to_dict()}))
+    assert TestResult.from_dict(event["result"], test) == result
+    entry = json.loads(json.dumps(results_entry(test, result.outcome, result.seconds)))
+    assert {key: entry["extra_data"][key] for key in event["result"]} == event["result"]
+    back = result_of_entry(entry, 1)
+    assert (back.outcome, back.seconds, back.score) == (result.outcome, result.seconds, result.score) and 0 < back.score
+    job = Job(0, Submission("ada", Path("ada"), "folder"), "fingerprint", [test], [0])
+    worker = SimpleNamespace(job=job, deadline=0.0, attempt_started=0.0, ready=True)
+    _handle_event(worker, event, 10.0, lambda job, used: None)
+    assert job.results == {0: result} and job.remaining == []
+    unknown = TestResult.from_dict({**event["result"], "status": "exploded", "seconds": "soon"}, test)
+    assert (unknown.outcome.status, unknown.seconds) == ("error", 0.0)
+
+
+def test_no_second_serialised_form_of_a_result():
+    """to_dict/from_dict (one test's result, its outcome) are defined in outcome.py only."""
+    found = [f"{path.relative_to(GRADER)}:{node.lineno} {node.name}" for path, tree in sources()
+             if path not in VOCABULARY for node in ast.walk(tree)
+             if isinstance(node, ast.FunctionDef) and node.name in ("to_dict", "from_dict", "as_dict")]
+    assert not found, f"serialised forms outside grader/harness/outcome.py (use TestResult.to_dict): {found}"

@@ -40,7 +40,7 @@ from .gradebook import (FEEDBACK_NAME, GRADEBOOK_NAME, REPORT_NAME, FeedbackOpti
                         row_of, spec_hash, write_class_report, write_feedback, write_gradebook,
                         write_student_report)
 from ..sandbox.isolation import resolve_isolation
-from ..harness.results_model import SubmissionResults
+from ..harness.results_model import SubmissionResults, points
 from ..reports.results import RESULTS_NAME, read_results, write_results
 from ..sandbox.process import Limits
 from .scheduler import Job, Worker, dismiss, run_jobs, run_order
@@ -257,7 +257,7 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                         rows[submission.id] = row_of(submission, "refused", data, out_dir, data["output"])
                         bar.update(1)
                         continue
-                    todo.append(Job(len(todo), submission, submission_fingerprint, run_order(tests)))
+                    todo.append(Job(len(todo), submission, submission_fingerprint, tests, run_order(tests)))
                     todo[-1].hard_links = linked.get(submission.id, [])
                 workers, spare = workers[:len(todo)], workers[len(todo):]
                 dismiss(spare)
@@ -275,7 +275,8 @@ def grade_submissions(paths: list[str | os.PathLike], out_dir: str | os.PathLike
                         rows[job.submission.id] = finish_job(job, elapsed, tests, digest, out_dir, html, warn,
                                                           feedback)
                         row = rows[job.submission.id]
-                        score = f"{row['score']:g}/{row['max_score']:g}" if row["score"] is not None else row["state"]
+                        score = f"{points(row['score'])}/{points(row['max_score'])}" if row["score"] is not None \
+                            else row["state"]
                         bar.update(1)
                         bar.set_postfix_str(f"{job.submission.id}: {score}")
 

@@ -33,10 +33,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from ..harness.outcome import Outcome, TestResult
 from ..harness.results_model import SubmissionResults, points
 from ..reports.results import RESULTS_NAME, read_results, read_submission_results, write_results, write_text_atomic
-from .scheduler import Job
+from .scheduler import Job, not_run
 from ..harness.spec import TestSpec
 from ..harness.run import load_spec
 from .submissions import Submission, library_note
@@ -147,8 +146,7 @@ def finish_job(job: Job, elapsed: float, tests: list[TestSpec], digest: str, out
         model = SubmissionResults.refused(tests, job.refused, elapsed, submission.id, job.fingerprint, digest)
     else:
         model = SubmissionResults.graded(
-            [TestResult(test, *job.outcomes.get(index, (Outcome("not_run", message="this test did not run"), 0.0)))
-             for index, test in enumerate(tests)],
+            [job.results.get(index) or not_run(test) for index, test in enumerate(tests)],
             elapsed, submission.id, job.fingerprint, digest, job.package, job.isolation)
         if job.library_replaced:
             model.output += "\n" + library_note(job.library_replaced)

@@ -40,7 +40,7 @@ from pathlib import Path
 from typing import Callable
 
 from ..errors import GradingError
-from ..harness.outcome import Outcome
+from ..harness.outcome import Outcome, TestResult
 from ..sandbox.process import Limits
 from ..harness.spec import TestSpec
 from .source_audit import source_flags, suspicious_lines, withheld_functions
@@ -68,8 +68,9 @@ def worker_main() -> int:
 
     Job: ``{"job": n, "id": ..., "path": ..., "kind": ..., "tests": [indices], "budget": s}``.
     Events: ``ready``; per job ``started`` (with ``package``), one ``test`` per test
-    (``index``, ``outcome``, ``seconds``), ``refused`` or ``error`` (with ``reason``),
-    and ``done``.
+    (``index`` in the spec, ``result``: the test result's one serialised form,
+    :meth:`~grader.harness.outcome.TestResult.to_dict`), ``refused`` or ``error`` (with
+    ``reason``), and ``done``.
     """
     channel = os.fdopen(os.dup(1), "w", encoding="utf-8")
     os.dup2(2, 1)  # anything else printed goes to the log, not into the protocol
@@ -124,8 +125,7 @@ def worker_main() -> int:
                     if index is None:
                         return
                     unclaimed.remove(index)
-                    send({"event": "test", "job": number, "index": index,
-                          "outcome": result.outcome.to_dict(), "seconds": result.seconds})
+                    send({"event": "test", "job": number, "index": index, "result": result.to_dict()})
 
                 run_tests(package, [tests[i] for i in indices], limits, slot, config["isolation"],
                           budget_seconds=job["budget"], progress=progress, withheld=withheld)
@@ -268,8 +268,11 @@ class Job:
     number: int
     submission: Submission
     fingerprint: str
+    #: The spec's tests (a result's index is its place here).
+    tests: list[TestSpec]
     remaining: list[int]
-    outcomes: dict[int, tuple[Outcome, float]] = field(default_factory=dict)
+    #: What each test found, by index, as the worker sent it or as the parent decided.
+    results: dict[int, TestResult] = field(default_factory=dict)
     used: float = 0.0  # seconds of earlier attempts
     deaths: int = 0
     package: str | None = None
@@ -280,6 +283,11 @@ class Job:
     hard_links: list[str] = field(default_factory=list)  # files shared with others (submissions.hard_links)
     refused: str | None = None
     error: str | None = None
+
+
+def not_run(test: TestSpec) -> TestResult:
+    """The result of a test a finished job has none for."""
+    return TestResult(test, Outcome("not_run", message="this test did not run"), 0.0)
 
 
 def run_order(tests: list[TestSpec]) -> list[int]:
@@ -303,7 +311,7 @@ def run_jobs(todo: list[Job], started: list[Worker], config: dict, work: Path, p
 
     def give_up(job: Job, reason: str, status: str) -> None:
         for index in job.remaining:
-            job.outcomes[index] = (Outcome(status, message=reason), 0.0)
+            job.results[index] = TestResult(job.tests[index], Outcome(status, message=reason), 0.0)
         job.remaining = []
 
     def interrupted(worker: Worker, job: Job, status: str, message: str) -> None:
@@ -312,7 +320,8 @@ def run_jobs(todo: list[Job], started: list[Worker], config: dict, work: Path, p
         job.used += now - worker.attempt_started
         if job.remaining:
             current = job.remaining.pop(0)
-            job.outcomes[current] = (Outcome(status, message=message), now - worker.deadline + per_test_seconds)
+            job.results[current] = TestResult(job.tests[current], Outcome(status, message=message),
+                                              now - worker.deadline + per_test_seconds)
         if job.used >= per_submission_seconds:
             give_up(job, f"not run: the submission used up its {per_submission_seconds:g} s", "timeout")
         elif job.deaths > MAX_WORKER_DEATHS:
@@ -395,9 +404,8 @@ def _handle_event(worker: Worker, event: dict, per_test_seconds: float,
         worker.deadline = now + per_test_seconds
     elif kind == "test":
         index = int(event["index"])
-        data = event["outcome"]
-        outcome = Outcome.from_dict(data if isinstance(data, dict) else {})
-        job.outcomes[index] = (outcome, float(event.get("seconds", 0.0)))
+        data = event.get("result")
+        job.results[index] = TestResult.from_dict(data if isinstance(data, dict) else {}, job.tests[index])
         if index in job.remaining:
             job.remaining.remove(index)
         worker.deadline = now + per_test_seconds
@@ -411,7 +419,7 @@ def _handle_event(worker: Worker, event: dict, per_test_seconds: float,
         worker.deadline = float("inf")
         if job.refused is None and job.error is None:
             for index in job.remaining:  # run_tests answers for every test it is given
-                job.outcomes.setdefault(index, (Outcome("not_run", message="this test did not run"), 0.0))
+                job.results.setdefault(index, not_run(job.tests[index]))
             job.remaining = []
         finished(job, job.used)
 

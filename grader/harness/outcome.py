@@ -3,6 +3,7 @@ test statuses every part of the grader uses (``grader check``, the reports, the
 gradebook and Gradescope's results.json)."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from .credit import partial_points
@@ -184,6 +185,10 @@ class TestResult:
     recorded_text: str | None = None
 
     @property
+    def passed(self) -> bool:
+        return self.outcome.status == "passed"
+
+    @property
     def score(self) -> float:
         """Full points for a pass; for a failure of a partial-credit test, the points
         :func:`grader.harness.credit.partial_points` gives its share of right cases; else 0.
@@ -195,3 +200,25 @@ class TestResult:
         if self.outcome.status != "failed" or not self.test.partial_credit:
             return 0.0
         return partial_points(self.test.points, self.outcome.fraction)
+
+    def to_dict(self) -> dict:
+        """The one serialised form of a test result (plain data, JSON): the test's
+        ``test`` (spec name) and ``exercise``, the ``seconds`` it took, and its outcome's
+        keys (:meth:`Outcome.to_dict`).  A grading worker sends it to the batch's parent
+        as it stands; results.json keeps it, within that file's size limits, as each
+        test's ``extra_data`` (:func:`grader.harness.results_model.results_entry`)."""
+        return {"test": self.test.name, "exercise": self.test.exercise, "seconds": float(self.seconds),
+                **self.outcome.to_dict()}
+
+    @classmethod
+    def from_dict(cls, data: dict, test: TestSpec) -> "TestResult":
+        """The result ``to_dict`` wrote, of ``test`` (the spec the reader knows it by):
+        the outcome as :meth:`Outcome.from_dict` reads it, a time that is not a finite
+        number as 0."""
+        try:
+            seconds = float(data.get("seconds", 0.0))
+        except (TypeError, ValueError):
+            seconds = 0.0
+        if isinstance(data.get("seconds"), bool) or not math.isfinite(seconds):
+            seconds = 0.0
+        return cls(test, Outcome.from_dict(data), seconds)

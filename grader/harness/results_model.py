@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .outcome import MESSAGE_LIMIT, Outcome, TestResult, capped, status_of
+from .outcome import Outcome, TestResult, capped, status_of
 from .spec import TestSpec
 
 #: Characters of one test's output kept (Gradescope shows it in a collapsed <pre>).
@@ -98,6 +98,18 @@ def html_page(title: str, body: list[str], head: str = "") -> str:
     return "\n".join(["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">', *([head] if head else []),
                       f"<title>{escaped(title)}</title>", f"<style>{STYLE_SHEET}</style></head>",
                       '<body class="report">', *body, "</body></html>", ""])
+
+
+def leaderboard_table(entries: list[dict], value_heading: str = "Value") -> list[str]:
+    """Leaderboard entries (results.json's) as the lines of an HTML table: the column,
+    the value (4 significant digits) and which way is better."""
+    lines = [f"<table><tr><th>Column</th><th class='num'>{escaped(value_heading)}</th><th>Order</th></tr>"]
+    for entry in entries:
+        value = number_or(entry.get("value"))
+        shown = f"{value:.4g}" if value is not None else escaped(entry.get("value"))
+        order = "lower is better" if entry.get("order", "desc") == "asc" else "higher is better"
+        lines.append(f"<tr><td>{escaped(entry['name'])}</td><td class='num'>{shown}</td><td>{order}</td></tr>")
+    return lines + ["</table>"]
 
 
 def plain(value: Any) -> Any:
@@ -247,10 +259,13 @@ def results_entry(test: TestSpec, outcome: Outcome, seconds: float = 0.0) -> dic
     failed test with a figure gets an HTML output holding its picture (see
     :mod:`grader.reports.results`); every other test a text output.
     """
-    fraction = max(0.0, min(1.0, float(outcome.fraction)))
     score = round(TestResult(test, outcome, seconds).score, 6)
     text = student_output(outcome, score, test.points)
     figure = kept_figure(outcome.figure)
+    # The result's one serialised form (TestResult.to_dict), within this file's limits.
+    kept = Outcome(outcome.status, max(0.0, min(1.0, float(outcome.fraction))),
+                   capped(outcome.message or "", OUTPUT_LIMIT), figure, plain(outcome.metrics or {}),
+                   (outcome.output or "")[:OUTPUT_LIMIT])
     entry = {
         "name": test.title,
         "score": score,
@@ -260,18 +275,7 @@ def results_entry(test: TestSpec, outcome: Outcome, seconds: float = 0.0) -> dic
         "output_format": "text",
         "visibility": test.visibility,
         "tags": [test.exercise],
-        "extra_data": {
-            "test": test.name,
-            "exercise": test.exercise,
-            "status": outcome.status,
-            "fraction": fraction,
-            "seconds": round(float(seconds), 4),
-            "metrics": plain(outcome.metrics or {}),
-            "figure": figure,
-            "message": capped(outcome.message or "", OUTPUT_LIMIT),
-            "printed": (outcome.output or "")[:OUTPUT_LIMIT],
-            "leaderboard": test.leaderboard,
-        },
+        "extra_data": {**TestResult(test, kept, round(float(seconds), 4)).to_dict(), "leaderboard": test.leaderboard},
     }
     if figure is not None and outcome.status != "passed":
         entry["output"] = html_output(text, figure, f"the failing case of {test.title}")
@@ -315,16 +319,16 @@ def result_of_entry(entry: dict, number: int, visibility: str = "visible") -> Te
     board = extra.get("leaderboard") if isinstance(extra.get("leaderboard"), str) else None
     # The text the student read follows from the rest, unless the file was written before
     # messages were kept apart (or by something else): then it is kept as written.
-    message = extra.get("message")
-    text = None if isinstance(message, str) else output_text(entry)
-    printed = extra.get("printed")
-    figure = extra.get("figure") if isinstance(extra.get("figure"), dict) else None
-    fraction = number_or(extra.get("fraction"), 0.0)
-    outcome = Outcome(status, min(1.0, max(0.0, fraction)), capped(message or "", MESSAGE_LIMIT), figure,
-                      dict(_dict(extra.get("metrics"))), printed if isinstance(printed, str) else "")
+    text = None if isinstance(extra.get("message"), str) else output_text(entry)
     spec = TestSpec(name=name, exercise=exercise, title=title, points=max_score,
                     visibility=shown if isinstance(shown, str) else "hidden", leaderboard=board)
-    return TestResult(spec, outcome, number_or(extra.get("seconds"), 0.0), recorded_score=score, recorded_text=text)
+    # extra_data is TestResult.to_dict's form; files written before it was kept what the
+    # code printed under "printed".
+    printed = extra["output"] if isinstance(extra.get("output"), str) else extra.get("printed")
+    result = TestResult.from_dict({**extra, "status": status, "output": printed if isinstance(printed, str) else ""},
+                                  spec)
+    result.recorded_score, result.recorded_text = score, text
+    return result
 
 
 # One submission -----------------------------------------------------------------------------
@@ -408,7 +412,7 @@ class SubmissionResults:
 
     @property
     def passed(self) -> bool:
-        return all(r.outcome.status == "passed" for r in self.tests)
+        return all(r.passed for r in self.tests)
 
     def counts(self) -> dict[str, int]:
         """How many tests ended with each status, in order of first appearance."""

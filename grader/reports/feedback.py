@@ -37,8 +37,8 @@ import re
 from pathlib import Path
 
 from ..harness.outcome import TestResult
-from ..harness.results_model import (SubmissionResults, badge, escaped, format_metrics, html_page, picture_html,
-                                     plain, points)
+from ..harness.results_model import (SubmissionResults, badge, escaped, format_metrics, html_page,
+                                     leaderboard_table, picture_html, plain, points)
 from .results import read_submission_results, write_text_atomic
 
 FEEDBACK_NAME = "feedback.html"
@@ -109,15 +109,7 @@ def feedback_html(results: SubmissionResults | dict, after_due_date: bool = Fals
     columns = {r.test.leaderboard for r in shown}
     board = [e for e in results.leaderboard if e["name"] in columns]
     if board:
-        body += ["<h2>Leaderboard</h2>", "<table><tr><th>Column</th><th>Your value</th><th>Order</th></tr>"]
-        for entry in board:
-            value = entry.get("value")
-            order = "lower is better" if entry.get("order", "desc") == "asc" else "higher is better"
-            shown_value = f"{value:.4g}" if isinstance(value, (int, float)) and not isinstance(value, bool) \
-                else escaped(value)
-            body.append(f"<tr><td>{escaped(entry['name'])}</td><td class='num'>{shown_value}</td>"
-                        f"<td>{order}</td></tr>")
-        body.append("</table>")
+        body += ["<h2>Leaderboard</h2>", *leaderboard_table(board, "Your value")]
 
     body.append("<h2>Tests</h2>")
     if shown:

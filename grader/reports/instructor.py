@@ -31,7 +31,7 @@ from matplotlib.figure import Figure
 from ..harness.figures import GOT_COLOR, EXPECTED_COLOR, figure_png_base64
 from ..harness.outcome import TestResult
 from ..harness.results_model import SubmissionResults, badge, escaped as _e, html_page, number_or as _number, points
-from ..harness.results_model import picture_html, status_word, student_text
+from ..harness.results_model import leaderboard_table, picture_html, status_word, student_text
 from ..sandbox.isolation import isolation_words
 from .results import read_submission_results
 
@@ -47,10 +47,6 @@ ERROR_MEASURES = (
 )
 #: Every point of a scatter is named when there are at most this many (failed ones always are).
 MAX_LABELLED_POINTS = 8
-
-def passed(result: TestResult) -> bool:
-    return result.outcome.status == "passed"
-
 
 def _img(data: str, alt: str) -> str:
     return f'<img alt="{_e(alt)}" src="data:image/png;base64,{data}">'
@@ -115,13 +111,7 @@ def write_student_report(results_json: SubmissionResults | Path, out_html: Path,
         body.append("<p>" + ", ".join(f"{badge(s)} {n}" for s, n in counts.most_common()) + "</p>")
 
     if submission.leaderboard:
-        body += ["<h2>Leaderboard</h2>", "<table><tr><th>Column</th><th class='num'>Value</th><th>Order</th></tr>"]
-        for entry in submission.leaderboard:
-            value = _number(entry.get("value"))
-            shown = f"{value:.4g}" if value is not None else _e(entry.get("value"))
-            order = "lower is better" if entry.get("order", "desc") == "asc" else "higher is better"
-            body.append(f"<tr><td>{_e(entry['name'])}</td><td class='num'>{shown}</td><td>{order}</td></tr>")
-        body.append("</table>")
+        body += ["<h2>Leaderboard</h2>", *leaderboard_table(submission.leaderboard)]
 
     body += ["<h2>Tests</h2>",
              "<table><tr><th>Test</th><th>Exercise</th><th>Visibility</th><th>Result</th>"
@@ -129,7 +119,7 @@ def write_student_report(results_json: SubmissionResults | Path, out_html: Path,
     for test in submission.tests:
         spec = test.test
         figure = figures.get(spec.name, figures.get(spec.title, test.outcome.figure))
-        picture = "" if passed(test) else picture_html(figure, f"failing case of {spec.name}")
+        picture = "" if test.passed else picture_html(figure, f"failing case of {spec.name}")
         body.append(
             f"<tr><td>{_e(spec.title)}<br><code>{_e(spec.name)}</code></td><td>{_e(spec.exercise)}</td>"
             f"<td>{_e(spec.visibility)}</td><td>{badge(test.outcome.status)}</td>"
@@ -186,7 +176,7 @@ def tally_tests(submissions: list[SubmissionResults]) -> list[Tally]:
             spec = test.test
             summary = table.setdefault(spec.name, Tally(spec.name, spec.title, spec.exercise, spec.visibility))
             summary.runs += 1
-            summary.failures += not passed(test)
+            summary.failures += not test.passed
             summary.score_sum += test.score
             summary.max_score = spec.points if spec.points is not None else summary.max_score
             summary.statuses[test.outcome.status] += 1
@@ -253,7 +243,7 @@ def speed_points(submissions: list[SubmissionResults]) -> dict[str, dict]:
             if seconds is None or not reference or reference <= 0 or seconds <= 0 or None in values:
                 skipped += 1
                 continue
-            scatter.append((submission_id, seconds / reference, float(sum(values)), passed(test)))
+            scatter.append((submission_id, seconds / reference, float(sum(values)), test.passed))
         if scatter:
             out[name] = {"title": runs[0][1].test.title, "label": label, "points": scatter, "skipped": skipped}
     return out
@@ -350,7 +340,7 @@ def write_class_report(out_dir: Path) -> Path:
     maxima = sorted({s.max_score for s in graded if s.max_score is not None})
     if scores:
         rows = "".join(f"<tr><td>{k}</td><td class='num'>{v:.3g}</td></tr>" for k, v in _stats(scores).items())
-        top = f"{maxima[0]:g}" if len(maxima) == 1 else ", ".join(f"{m:g}" for m in maxima) or "unknown"
+        top = ", ".join(points(m) for m in maxima) or "unknown"
         body.append(f"<table class='stats'><tr><td>submissions graded</td><td class='num'>{len(graded)}</td></tr>"
                     f"<tr><td>maximum score</td><td class='num'>{top}</td></tr>{rows}"
                     f"<tr><td>full marks</td><td class='num'>"

@@ -19,11 +19,13 @@ failing case has that text as HTML instead (``"output_format": "html"``, which
 Gradescope renders): the text in a ``<pre>``, escaped, then the picture as an inline
 base64 PNG (left out, with a sentence saying so, when larger than
 :data:`PICTURE_LIMIT`).  Each test's ``extra_data`` keeps the data behind that text for
-the reports: ``test`` (the spec name), ``exercise``, ``status`` (the finer status),
-``fraction``, ``seconds``, ``metrics``, ``figure`` (plain data for
-:mod:`grader.harness.figures`, or None), ``message`` (what the test found), ``printed`` (what
-the student's code printed) and, for an HTML output, ``output_text`` (the same output
-as plain text).
+the reports: the test result's one serialised form
+(:meth:`grader.harness.outcome.TestResult.to_dict`, the form a grading worker sends
+too): ``test`` (the spec name), ``exercise``, ``seconds``, ``status`` (the finer
+status), ``fraction``, ``message`` (what the test found), ``figure`` (plain data for
+:mod:`grader.harness.figures`, or None), ``metrics`` and ``output`` (what the student's
+code printed); then ``leaderboard`` and, for an HTML output, ``output_text`` (the same
+output as plain text).
 
 The top-level ``max_score`` is not in Gradescope's list (it takes the total from the
 assignment's settings); it is kept for the gradebook and reports.  A test of the spec

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from .harness.results_model import points
 from .student.check import in_student_edition
 
 #: subcommand -> (module, add-arguments function, main function, help)
@@ -39,7 +40,7 @@ def list_tests(args) -> int:
     width = max(len(t.name) for t in tests)
     for test in tests:
         print(f"{test.name:{width}s}  {test.exercise:9s} {test.points:4g} pt  {test.visibility:16s} {test.title}")
-    print(f"{len(tests)} tests, {sum(t.points for t in tests):g} points")
+    print(f"{len(tests)} tests, {points(sum(t.points for t in tests))} points")
     return 0
 
 

@@ -50,6 +50,7 @@ from ..sandbox.isolation import isolation_words
 from .module_graph import files_reached, ignored, third_party_modules
 from .pins import locked, pins_for_modules
 from ..reports.results import RESULTS_NAME, write_results
+from ..harness.results_model import points
 from ..harness.spec import SpecError
 from ..errors import GradingError
 
@@ -286,7 +287,7 @@ def run_autograder(root: str | os.PathLike | None = None, isolation: str = "auto
         return 1
     data = row["results"]
     write_results(data, results_path)
-    print(f"{row['state']}: {data['score']:g} / {data['max_score']:g} points in "
+    print(f"{row['state']}: {points(data['score'])} / {points(data['max_score'])} points in "
           f"{time.perf_counter() - started:.1f} s")
     isolation = (data.get("extra_data") or {}).get("isolation")
     if isolation:
@@ -327,7 +328,7 @@ def check_setup(source: Path = REPO_ROOT) -> int:
         print(f"check-setup: the graded tests cannot be loaded: {exc}", flush=True)
         return 1
     print(f"check-setup: {len(files)} modules' imports found; {len(tests)} tests, "
-          f"{sum(t.points for t in tests):g} points", flush=True)
+          f"{points(sum(t.points for t in tests))} points", flush=True)
     return 0
 
 

@@ -14,8 +14,8 @@ Fat boxes (``margin``, m)
     A leaf stores its body's tight box grown by ``margin`` on every side.  While the
     body's tight box stays inside that fat box, :meth:`DynamicTree.move` changes
     nothing in the tree; only a body that leaves its fat box is removed and inserted
-    again, with a new fat box around its new tight box.  Box2D uses
-    ``B2_AABB_MARGIN`` = 0.1 m (v3, ``constants.h``): a body moving 1 m/s at 60 Hz
+    again, with a new fat box around its new tight box.  Box2D v3 uses
+    ``b2_aabbMargin`` = 0.1 m: a body moving 1 m/s at 60 Hz
     reinserts about every sixth step instead of every step.  Pairs are still exact:
     they are found between *tight* boxes; the fat boxes only steer the search.
 

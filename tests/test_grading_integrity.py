@@ -15,6 +15,7 @@ import pytest
 from grader.harness.run import load_spec, run_tests
 from grader.samples.example_class import (EXERCISES_DIR, SOLUTIONS_DIR, BuggySample, Replacement, build_buggy_sample,
                                           grade_probe)
+from grader.samples.shortcuts import MANIFOLD_REPEATS_A_POINT, SHORTCUTS
 
 
 def sandbox_slot() -> int:
@@ -144,49 +145,10 @@ def test_no_library_module_of_the_student_package_chooses_the_reference_face():
         speculative_polygon_manifold(AABB((-5.0, -1.0), (5.0, 0.0)), AABB((-0.5, -0.1), (0.5, 0.9)))
 
 
-#: The reference's reference_face_manifold as a student writes it, with three places to
-#: change: KEPT (the condition on a clipped point), DEPTH (its depth) and UNIQUE (the check
-#: for a point already kept).
-CLIPPING = '''
-    def reference_face_manifold(ref_vertices, ref_normal, ref_face, inc_vertices, inc_normals, inc_faces,
-                                ref_name, scale, margin=0.0):
-        n = ref_normal
-        tangent = np.array([-n[1], n[0]])
-        i1, i2 = ref_face, (ref_face + 1) % len(ref_vertices)
-        v1, v2 = ref_vertices[i1], ref_vertices[i2]
-        j = incident_face(inc_normals, inc_faces, n)
-        j2 = (j + 1) % len(inc_vertices)
-        segment = [(inc_vertices[j], (ref_name, ref_face, j, j)), (inc_vertices[j2], (ref_name, ref_face, j, j2))]
-        roundoff = KEEP_POINT_TOL * scale
-        segment = clip_segment_to_half_plane(segment, tangent, float(tangent @ v2), roundoff)
-        segment = clip_segment_to_half_plane(segment, -tangent, float(-tangent @ v1), roundoff)
-        points, depths, feature_ids = [], [], []
-        for point, feature in segment:
-            separation = float(n @ (point - v1))
-            midpoint = point - 0.5 * separation * n
-            if KEPT and UNIQUE:
-                points.append(midpoint)
-                depths.append(DEPTH)
-                feature_ids.append(feature)
-        return points, depths, feature_ids
-    '''
-
-
-def clipping(kept: str = "separation <= margin + roundoff", depth: str = "-separation",
-             unique: str = "not any(float(np.max(np.abs(midpoint - q))) <= roundoff for q in points)") -> tuple:
-    source = CLIPPING.replace("KEPT", kept).replace("DEPTH", depth).replace("UNIQUE", unique)
-    return (Replacement("narrowphase.polygon_polygon", "reference_face_manifold", source),)
-
-
-#: reference_face_manifold without the check for a repeated point: a zero-size incident
-#: face gives its one point twice.
-MANIFOLD_WITH_REPEATED_POINTS = clipping(unique="True")
-
-
 def test_a_repeated_contact_point_fails_public_tests_and_is_named(tmp_path):
     # On main only the hidden contacts.degenerate_shapes saw it.
     names = {"contacts.reference_face_manifold", "contacts.polygon_polygon"}
-    results = graded(tmp_path, MANIFOLD_WITH_REPEATED_POINTS, names)
+    results = graded(tmp_path, MANIFOLD_REPEATS_A_POINT, names)
     manifold, polygons = results["contacts.reference_face_manifold"], results["contacts.polygon_polygon"]
     assert manifold.score == 0, manifold.outcome.message[:500]
     assert polygons.score <= polygons.test.points / 2, (polygons.score, polygons.outcome.message[:500])
@@ -194,31 +156,10 @@ def test_a_repeated_contact_point_fails_public_tests_and_is_named(tmp_path):
         assert "are the same point" in result.outcome.message, result.outcome.message[:1000]
 
 
-#: Shortcuts a student may take in one function, each a systematic bug of that function:
-#: (the function, "module.qualname" as the probe names it, the rewritten function).
-SYSTEMATIC_BUGS = {
-    # Points above the reference face dropped whatever the margin (the soft step's speculative
-    # points are lost), or kept with their depth clamped at 0 (they count as touching).
-    "manifold-ignores-margin": ("narrowphase.polygon_polygon.reference_face_manifold",
-                                clipping(kept="separation <= roundoff")),
-    "manifold-depth-clamped-at-0": ("narrowphase.polygon_polygon.reference_face_manifold",
-                                    clipping(depth="max(-separation, 0.0)")),
-    # Every row's accumulated impulse clamped at 0, its lower bound ignored: a joint never pulls.
-    "normal-rows-clamped-at-0": ("solver.contact_point.apply_normal_impulse", (Replacement(
-        "solver.contact_point", "apply_normal_impulse", '''
-        def apply_normal_impulse(velocity_a, velocity_b, point, normal_total, target=0.0, mass_scale=1.0,
-                                 impulse_scale=0.0):
-            vxa, vya, wa = velocity_a
-            vxb, vyb, wb = velocity_b
-            nx, ny, rn_a, rn_b, _, _, ima, imb, iia, iib, mass_normal, _, _, lower = point
-            normal_velocity = (vxb - vxa) * nx + (vyb - vya) * ny + wb * rn_b - wa * rn_a
-            change = mass_normal * mass_scale * (target - normal_velocity) - impulse_scale * normal_total
-            new_total = max(normal_total + change, 0.0)
-            change = new_total - normal_total
-            return ((vxa - ima * change * nx, vya - ima * change * ny, wa - iia * rn_a * change),
-                    (vxb + imb * change * nx, vyb + imb * change * ny, wb + iib * rn_b * change), new_total)
-        '''),)),
-}
+#: The shortcuts of grader/samples/shortcuts.py and the function each one rewrites, as the
+#: probe names it ("module.qualname").
+SYSTEMATIC_BUGS = {name: f"{replacements[0].module}.{replacements[0].qualname}"
+                   for name, replacements in SHORTCUTS.items()}
 
 
 @pytest.fixture(scope="module")
@@ -235,7 +176,7 @@ def reached(tmp_path_factory) -> dict:
 def test_a_systematic_bug_loses_at_least_half_of_its_functions_points(tmp_path, reached, bug):
     # On main a manifold ignoring the margin or clamping its depths lost 1 of 14 points, a
     # row clamped at 0 2 of apply_normal_impulse's 8.
-    function, replacements = SYSTEMATIC_BUGS[bug]
+    function, replacements = SYSTEMATIC_BUGS[bug], SHORTCUTS[bug]
     names = {name for name, functions in reached.items() if functions is None or function in functions}
     results = graded(tmp_path, replacements, names)
     at_stake = sum(r.test.points for r in results.values())

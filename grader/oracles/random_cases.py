@@ -21,6 +21,20 @@ def random_aabbs(rng: np.random.Generator, count: int, world: float = 50.0, size
     return np.hstack([centres - halves, centres + halves])
 
 
+def resting_piles(rng: np.random.Generator, count: int, origin=(0.0, 0.0)) -> np.ndarray:
+    """``count`` boxes [min_x, min_y, max_x, max_y] as crates rest in a world: side-by-side
+    columns of 1 to 5 stacked boxes, 0.5, 1 or 2 m wide and 0.5 or 1 m tall, from ``origin``
+    (their bottom left) rightwards.  Every box touches its neighbours exactly, along an edge
+    or at a corner, and every coordinate is a multiple of 0.5 m."""
+    boxes: list[list[float]] = []
+    x, y = (float(v) for v in origin)
+    while len(boxes) < count:
+        width, height = float(rng.choice([0.5, 1.0, 2.0])), float(rng.choice([0.5, 1.0]))
+        boxes += [[x, y + k * height, x + width, y + (k + 1) * height] for k in range(int(rng.integers(1, 6)))]
+        x += width
+    return np.array(boxes[:count], dtype=float)
+
+
 def clustered_aabbs(rng: np.random.Generator, count: int, clusters: int = 4) -> np.ndarray:
     centres = rng.uniform(-30, 30, size=(clusters, 2))[rng.integers(0, clusters, count)]
     centres = centres + rng.normal(0, 2.0, size=(count, 2))

@@ -270,8 +270,9 @@ GRID_STRICT_TOUCHING = BuggySample(
         "grid.every_cell_special_cases",
         "grid.every_cell_on_cell_lines",
         "grid.every_cell_hard_cases",
-        # Not failed: random boxes and the negative-cells category (their boxes never
-        # touch exactly).
+        # The resting crates among the random scenes (4 of 24 scenes wrong).
+        "grid.every_cell_random",
+        # Not failed: the negative-cells category (its boxes never touch exactly).
     }),
 )
 
@@ -350,8 +351,8 @@ GRID_INT_CENTRE_CELL = BuggySample(
         "grid.center_cell_negative_cells",
         # Its negative scenes: 25 of 150 wrong.
         "grid.center_cell_hard_cases",
-        # Random boxes around the origin: 2 of 20 scenes wrong, exactly 90 % right, so
-        # it keeps exactly half its points (the least a systematic bug may keep).
+        # Random boxes around the origin (2 of 20 scenes wrong) and resting crates left
+        # of and below it.
         "grid.center_cell_random",
         # A long box below y = 0 and a partner whose centre lies at y = -0.875: filed in
         # cell 0, one row above the window searched for the long box.
@@ -548,8 +549,10 @@ QUADTREE_ON_SPLIT_LINE = BuggySample(
         # A box on the root's splitting line is stored in a quarter: "a box touching or
         # crossing a splitting line has no child, it must stay at that node".
         "quadtree.structure",
-        # Not failed: random, clustered and straddling scenes (no box ends exactly on a
-        # line), coincident points, bodies outside the root in the seeded scenes.
+        # The resting crates among the random scenes, touching on the root's lines.
+        "quadtree.random",
+        # Not failed: straddling scenes (no box ends exactly on a line), coincident points,
+        # bodies outside the root in the seeded scenes.
     }),
 )
 

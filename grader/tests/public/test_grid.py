@@ -18,7 +18,7 @@ from grader.harness.compare import pairs as compare_pairs
 from grader.harness.compare import show
 from grader.harness.credit import fail
 from grader.oracles.brute_force import describe_boxes, overlapping_pairs, pairs_figure, smallest_wrong_scene
-from grader.oracles.random_cases import clustered_aabbs, random_aabbs
+from grader.oracles.random_cases import clustered_aabbs, random_aabbs, resting_piles
 from grader.oracles.scaling import GRID_GROWTH_FACTOR, GRID_SMALL_SCENE, growth_problem
 from grader.harness.outcome import StudentCallFailed, StudentCallStopped
 
@@ -111,6 +111,17 @@ def random_scenes(seed: int, count: int = 20, boxes: int = 60) -> list[tuple[np.
     scenes = []
     for k in range(count):
         aabbs = random_aabbs(rng, boxes, world=30.0) if k % 5 else clustered_aabbs(rng, boxes)
+        scenes.append((aabbs, largest_side(aabbs) * CELL_FACTORS[k % len(CELL_FACTORS)]))
+    return scenes
+
+
+def pile_scenes(seed: int, count: int = 4, boxes: int = 60) -> list[tuple[np.ndarray, float]]:
+    """Resting crates (:func:`~grader.oracles.random_cases.resting_piles`: every box touches
+    its neighbours exactly), from the origin and left of and below it."""
+    rng = np.random.default_rng(seed)
+    scenes = []
+    for k in range(count):
+        aabbs = resting_piles(rng, boxes, origin=rng.integers(-25, 5, 2))
         scenes.append((aabbs, largest_side(aabbs) * CELL_FACTORS[k % len(CELL_FACTORS)]))
     return scenes
 
@@ -257,9 +268,9 @@ def check_special_cases(student, function: str) -> None:
 # Insert in every cell -----------------------------------------------------------------------
 @pytest.mark.points(3)
 @pytest.mark.partial_credit
-@pytest.mark.title("Grid, insert in every cell: random boxes")
+@pytest.mark.title("Grid, insert in every cell: random boxes and resting crates")
 def test_every_cell_random(student):
-    check_scenes(student, EVERY_CELL, random_scenes(101), "random boxes")
+    check_scenes(student, EVERY_CELL, random_scenes(101) + pile_scenes(104), "random boxes and resting crates")
 
 
 @pytest.mark.points(1)
@@ -304,9 +315,9 @@ def test_every_cell_negative_cells(student, scene):
 # Centre cell and neighbours -------------------------------------------------------------------
 @pytest.mark.points(3)
 @pytest.mark.partial_credit
-@pytest.mark.title("Grid, centre cell and neighbours: random boxes")
+@pytest.mark.title("Grid, centre cell and neighbours: random boxes and resting crates")
 def test_center_cell_random(student):
-    check_scenes(student, CENTER_CELL, random_scenes(103), "random boxes")
+    check_scenes(student, CENTER_CELL, random_scenes(103) + pile_scenes(105), "random boxes and resting crates")
 
 
 @pytest.mark.points(1)

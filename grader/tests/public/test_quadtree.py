@@ -18,7 +18,7 @@ from grader.harness.compare import pairs as compare_pairs
 from grader.harness.compare import show
 from grader.harness.credit import fail
 from grader.oracles.brute_force import describe_boxes, overlapping_pairs, pairs_figure, smallest_wrong_scene
-from grader.oracles.random_cases import clustered_aabbs, random_aabbs
+from grader.oracles.random_cases import clustered_aabbs, random_aabbs, resting_piles
 from grader.oracles.scaling import growth_problem
 from grader.harness.outcome import StudentCallFailed, StudentCallStopped
 
@@ -259,7 +259,7 @@ SPECIAL_CASES = [
 
 @pytest.mark.points(3)
 @pytest.mark.partial_credit
-@pytest.mark.title("Quadtree: random and clustered boxes")
+@pytest.mark.title("Quadtree: random and clustered boxes, resting crates")
 def test_random(student):
     rng = np.random.default_rng(201)
     scenes = []
@@ -267,7 +267,11 @@ def test_random(student):
         boxes = random_aabbs(rng, 80, world=30.0) if k % 4 else clustered_aabbs(rng, 80)
         bounds = None if k % 3 else [-32.0, -32.0, 32.0, 32.0]
         scenes.append((boxes, bounds, (1, 2, 4, 8)[k % 4]))
-    check_scenes(student, scenes, "random boxes")
+    # Crates resting on each other touch exactly, on the splitting lines of the root [-32, 32]^2.
+    piles = np.random.default_rng(202)
+    scenes += [(resting_piles(piles, 80, origin=piles.integers(-25, 5, 2)), [-32.0, -32.0, 32.0, 32.0], (1, 2, 4, 8)[k])
+               for k in range(4)]
+    check_scenes(student, scenes, "random boxes and resting crates")
 
 
 @pytest.mark.points(2)

@@ -51,7 +51,7 @@ setup() {
     if [ ! -f "$stamp" ]; then
         # pip's and setuptools' chatter goes to a log, shown only when the install fails.
         if ! { "$PY" -m pip install --quiet --upgrade pip &&
-               "$PY" -m pip install --quiet -e ".[dev,book]"; } >"$VENV/pip.log" 2>&1; then
+               "$PY" -m pip install --quiet -e ".[dev,book,bench]"; } >"$VENV/pip.log" 2>&1; then
             cat "$VENV/pip.log" >&2
             echo "setup: installing the pinned packages failed (log above, also in $VENV/pip.log)" >&2
             exit 1

@@ -1,4 +1,4 @@
-"""Hard scenes under a grid of settings: time per frame against error, reference, pymunk and Box2D.
+"""Hard scenes under a grid of settings: time per frame against error, reference, pymunk, Box2D 2.3 and v3.
 
     python bench/bench_hard_cases.py [--quick] [--out DIR]
 
@@ -12,7 +12,11 @@ Every scene runs under every setting of the grid, side by side in one run:
   compiled before timing);
 - pymunk 7: time step x iterations;
 - Box2D 2.3 (tools/box2d_mirror.py: polygons inset by Box2D's 0.01 m skin, materials
-  mixed as the reference's products): time step x velocity/position iterations.
+  mixed as the reference's products): time step x velocity/position iterations;
+- Box2D v3 (Box2D 3.1.1 through pyb2d3, tools/box2d_v3_mirror.py: one thread, polygons
+  without skin, exact rotations, materials mixed as the reference's products): time
+  step x its default settings (4 sub-steps, 30 Hz contacts) and stiffer ones (16
+  sub-steps, 120 Hz contacts).
 
 The runs of one scene advance together, 20 frames (of 1/60 s of simulated time) each in
 turn, in a new random order for each block, so a busy machine slows all of them alike
@@ -31,7 +35,8 @@ link for the chain, and the overlap left after one second for overlap recovery.
 Prints a table marking the Pareto-optimal settings of each scene (no other setting is
 both cheaper and more accurate), then the goals measured in this run: per scene, at
 each time per frame a pymunk or Box2D setting takes, the compiled reference's best
-error within that time against theirs; and pyramid_20 at its recommended settings
+error within that time against theirs, and per peer engine how many of its settings the
+reference beats so; and pyramid_20 at its recommended settings
 against Box2D at 8/3 iterations and pymunk at 30.  Writes DIR/hard_cases.md and
 DIR/hard_cases.png.
 """
@@ -53,6 +58,8 @@ from solutions.joints import anchor_world  # noqa: E402
 from solutions.scenes import get_scene  # noqa: E402
 from solutions.world import World  # noqa: E402
 from tools.box2d_mirror import Box2DMirror  # noqa: E402
+from tools.box2d_v3_mirror import SETTINGS as BOX2D_V3_SETTINGS  # noqa: E402
+from tools.box2d_v3_mirror import Box2DV3Mirror  # noqa: E402
 from tools.pymunk_mirror import build_space, copy_state  # noqa: E402
 
 FRAME = 1 / 60          # s of simulated time per frame
@@ -70,6 +77,8 @@ SOFT_GRID = [(substeps, sweeps) for substeps in (4, 8) for sweeps in (1, 2)]
 COMPILED_SOFT_GRID = [(substeps, 1) for substeps in (1, 2, 3, 4, 6, 8, 12, 16)] + [(8, 2)]
 PYMUNK_ITERATIONS = (10, 30)
 BOX2D_ITERATIONS = ((8, 3), (30, 10))  # (velocity, position) iterations
+#: The peer engines, each with how its settings are named in the tables.
+PEERS = {"pymunk": "pymunk", "box2d": "Box2D 2.3", "box2d-v3": "Box2D v3"}
 QUICK_PLAIN_GRID = [(10, "split_impulse", 1), (30, "split_impulse", 1), (10, "baumgarte", 1)]
 QUICK_SOFT_GRID = [(4, 1), (8, 1)]
 QUICK_COMPILED_SOFT_GRID = [(2, 1), (4, 1), (8, 1)]
@@ -145,6 +154,12 @@ def make_runs(name: str, quick: bool) -> list[Run]:
             runs.append(Run(name, "box2d", f"{label} it={velocity_iterations}/{position_iterations}", dt,
                             mirror.bodies, lambda m=mirror, h=dt: m.step(h, copy=False), mirror.joints,
                             mirror.copy_state))
+        for setting, options in BOX2D_V3_SETTINGS.items():
+            mirror = Box2DV3Mirror.from_scene(scene, setting)
+            hertz = options["contact_hertz"]
+            described = f"{setting} ({options['substeps']} sub, {'30' if hertz is None else f'{hertz:g}'} Hz)"
+            runs.append(Run(name, "box2d-v3", f"{label} {described}", dt, mirror.bodies,
+                            lambda m=mirror, h=dt: m.step(h, copy=False), mirror.joints, mirror.copy_state))
     return runs
 
 
@@ -273,7 +288,8 @@ def figure(rows: list[dict], path: Path) -> None:
     fig, axes = plt.subplots(1, len(scenes), figsize=(4.2 * len(scenes), 3.8), squeeze=False)
     for ax, name in zip(axes[0], scenes):
         for engine, kind, marker in (("reference", "plain", "o"), ("reference", "soft", "^"),
-                                     ("reference-numba", "soft", "v"), ("pymunk", "", "s"), ("box2d", "", "D")):
+                                     ("reference-numba", "soft", "v"), ("pymunk", "", "s"), ("box2d", "", "D"),
+                                     ("box2d-v3", "", "P")):
             pts = [r for r in rows if r["scene"] == name and r["engine"] == engine and kind in r["setting"]]
             ax.scatter([r["ms_per_frame"] for r in pts], [max(r["error"], 1e-6) for r in pts], marker=marker,
                        label=f"{engine} {kind}".strip(), alpha=0.8)
@@ -288,17 +304,19 @@ def figure(rows: list[dict], path: Path) -> None:
 
 
 def equal_time_goals(rows: list[dict]) -> str:
-    """Per scene and per peer setting (pymunk or Box2D): the compiled reference's best
-    error among its settings that take at most that setting's time per frame, and the
-    time its cheapest setting at least as accurate as the peer takes (as a multiple of
-    the peer's: above 1, how much faster the reference must become to meet the goal)."""
+    """Per scene and per peer setting (pymunk, Box2D 2.3 or v3): the compiled reference's
+    best error among its settings that take at most that setting's time per frame, and
+    the time its cheapest setting at least as accurate as the peer takes (as a multiple
+    of the peer's: above 1, how much faster the reference must become to meet the goal); then,
+    per peer engine, at how many of its settings' times the reference has the lower error."""
     lines = ["| scene | peer setting | peer ms/frame | peer error (m) | compiled reference at that time "
              "| its cheapest as accurate | met |",
              "| --- | --- | --- | --- | --- | --- | --- |"]
+    beaten = {engine: [0, 0] for engine in PEERS}      # [settings beaten, settings]
     for name in dict.fromkeys(r["scene"] for r in rows):
         compiled = [r for r in rows if r["scene"] == name and r["engine"] == "reference-numba"]
         fastest = min((r["ms_per_frame"] for r in compiled), default=math.inf)
-        for peer in (r for r in rows if r["scene"] == name and r["engine"] in ("pymunk", "box2d")):
+        for peer in (r for r in rows if r["scene"] == name and r["engine"] in PEERS):
             within = [r for r in compiled if r["ms_per_frame"] <= peer["ms_per_frame"]]
             best = min(within, key=lambda r: r["error"], default=None)
             shown = (f"{best['error']:.4f} m ({best['setting']}, {best['ms_per_frame']:.2f} ms)" if best else
@@ -308,14 +326,20 @@ def equal_time_goals(rows: list[dict]) -> str:
             needed = (f"{cheapest['ms_per_frame']:.3f} ms, {cheapest['ms_per_frame'] / peer['ms_per_frame']:.2f}x"
                       if cheapest else "none")
             met = best is not None and best["error"] < peer["error"]
+            beaten[peer["engine"]][0] += met
+            beaten[peer["engine"]][1] += 1
             lines.append(f"| {name} | {peer['engine']} {peer['setting']} | {peer['ms_per_frame']:.3f} | "
                          f"{peer['error']:.4f} | {shown} | {needed} | {'yes' if met else 'no'} |")
+    lines.append("")
+    lines += [f"At equal time the reference has the lower error at {won} of {count} {PEERS[engine]} settings."
+              for engine, (won, count) in beaten.items() if count]
     return "\n".join(lines)
 
 
 def pyramid_20_goal(seconds: float = 1.0) -> str:
-    """pyramid_20 at its recommended settings (compiled) against Box2D at 8/3 iterations
-    and pymunk at 30, processor time per frame measured side by side."""
+    """pyramid_20 at its recommended settings (compiled) against Box2D 2.3 at 8/3
+    iterations, Box2D v3 at its default and stiff settings and pymunk at 30, processor
+    time per frame measured side by side."""
     scene = get_scene("pyramid_20")
     settings = scene.recommended_settings()
     settings.backend = "numba"
@@ -323,8 +347,10 @@ def pyramid_20_goal(seconds: float = 1.0) -> str:
     bodies = scene.make_bodies()
     space, _ = build_space(bodies, scene.gravity, 30, 0.005, [])
     mirror = Box2DMirror.from_scene(scene, velocity_iterations=8, position_iterations=3)
+    v3 = {setting: Box2DV3Mirror.from_scene(scene, setting) for setting in BOX2D_V3_SETTINGS}
     steppers = {"reference (recommended, numba)": lambda: world.step(FRAME),
-                "Box2D 8/3": lambda: mirror.step(FRAME, copy=False), "pymunk 30": lambda: space.step(FRAME)}
+                "Box2D 8/3": lambda: mirror.step(FRAME, copy=False), "pymunk 30": lambda: space.step(FRAME),
+                **{f"Box2D v3 {setting}": (lambda m=m: m.step(FRAME, copy=False)) for setting, m in v3.items()}}
     spent = dict.fromkeys(steppers, 0.0)
     frames = round(seconds / FRAME)
     shuffle = np.random.default_rng(SHUFFLE_SEED)
@@ -351,8 +377,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     rows = run(args.quick)
     text = table(rows)
-    text += ("\n\nGoal: at equal processor time per frame, the compiled reference's error below pymunk's and "
-             "Box2D's\n\n" + equal_time_goals(rows) + "\n\n" + pyramid_20_goal(0.5 if args.quick else 1.0))
+    text += ("\n\nGoal: at equal processor time per frame, the compiled reference's error below pymunk's, "
+             "Box2D 2.3's and Box2D v3's\n\n" + equal_time_goals(rows) + "\n\n" + pyramid_20_goal(0.5 if args.quick else 1.0))
     print(text)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "hard_cases.md").write_text(text + "\n")

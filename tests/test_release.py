@@ -654,10 +654,18 @@ def test_changed_files_are_what_git_status_lists(tmp_path):
 def test_student_setup_in_fresh_venv(release, tmp_path):
     student = tmp_path / "course"
     shutil.copytree(release.student, student)
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV", "GRADER_CHECK_PACKAGE")}
+    # As on a student's machine, Python caches what it imports (PYTHONDONTWRITEBYTECODE unset):
+    # the venv's size is measured after setup and again after the course is used.
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("PYTHONPATH", "VIRTUAL_ENV", "GRADER_CHECK_PACKAGE", "PYTHONDONTWRITEBYTECODE")}
     env["PATH"] = os.pathsep.join(p for p in env.get("PATH", "").split(os.pathsep)
                                   if not Path(p).resolve().is_relative_to(REPO))
     env.setdefault("PYTHON", shutil.which("python3", path=env["PATH"]) or "python3")
+
+    def mib(*args):
+        return subprocess.run(["du", "-sm", *args], cwd=student, capture_output=True, text=True,
+                              check=True).stdout.split()[0]
+
     start = time.perf_counter()
     result = subprocess.run(["bash", "run.sh", "setup"], cwd=student, env=env, capture_output=True, text=True,
                             timeout=3600)
@@ -669,6 +677,13 @@ def test_student_setup_in_fresh_venv(release, tmp_path):
     print(f"bash run.sh setup: {setup_seconds:.0f} s in a fresh venv, {time.perf_counter() - start:.1f} s again")
     assert again.returncode == 0 and again.stdout == "", again.stdout + again.stderr
     python = student / ".venv/bin/python"
+    venv_after_setup, folder = mib(".venv"), mib("--exclude=.venv", "--exclude=__pycache__", ".")
+    # Nothing compiled ahead (sympy is imported by no step of setup), no setuptools, no library's test suite.
+    site = Path(subprocess.run([str(python), "-c", "import sysconfig; print(sysconfig.get_path('purelib'))"],
+                               env=env, capture_output=True, text=True, check=True).stdout.strip())
+    assert (site / "sympy").is_dir() and not list((site / "sympy").rglob("*.pyc"))
+    assert not list(site.glob("setuptools*")), list(site.glob("setuptools*"))
+    assert (site / "numpy/_core").is_dir() and not [p for p in site.rglob("tests") if p.is_dir()]
     result = subprocess.run([str(python), "-c", "import solutions"], cwd=student, env=env, capture_output=True,
                             text=True)
     assert result.returncode != 0 and "No module named 'solutions'" in result.stderr
@@ -686,9 +701,6 @@ def test_student_setup_in_fresh_venv(release, tmp_path):
                               "             if not NotebookNotary().check_signature(nbformat.read(p, 4))))"],
                              cwd=student, env=env, capture_output=True, text=True, check=True)
     assert trusted.stdout.strip() == "[]", trusted.stdout
-    venv_mib, folder_mib = (subprocess.run(["du", "-sm", *args], cwd=student, capture_output=True, text=True,
-                                           check=True).stdout.split()[0] for args in ([".venv"], ["--exclude=.venv", "."]))
-    print(f"student venv {venv_mib} MiB, student folder without it {folder_mib} MiB")
     lab = subprocess.run([str(student / ".venv/bin/jupyter"), "lab", "--version"], env=env, capture_output=True,
                          text=True, check=True)
     assert lab.stdout.startswith("4."), lab.stdout
@@ -707,6 +719,8 @@ def test_student_setup_in_fresh_venv(release, tmp_path):
                             timeout=600)
     assert result.returncode == 0, result.stdout + result.stderr
     assert list(student.glob("submission*.zip")), result.stdout
+    print(f"student venv {venv_after_setup} MiB after setup, {mib('.venv')} MiB after a check, a chapter and "
+          f"a submit; student folder as released {folder} MiB")
 
 
 def test_the_student_edition_does_not_install_the_instructors_compiled_twins(release):

@@ -56,8 +56,15 @@ setup() {
     if [ ! -f "$stamp" ]; then
         echo "installing the course's packages into $VENV (a few minutes the first time) ..."
         # pip's and setuptools' chatter goes to a log, shown only when the install fails.
-        if ! { "$PY" -m pip install --quiet --disable-pip-version-check --upgrade pip &&
-               "$PY" -m pip install --quiet --disable-pip-version-check -e . &&
+        # --no-compile: nothing is byte-compiled ahead (pip would compile every module, about
+        # 150 MiB); Python caches the modules it imports when they are first used.
+        if ! { "$PY" -m pip install --quiet --disable-pip-version-check --no-compile --upgrade pip &&
+               "$PY" -m pip install --quiet --disable-pip-version-check --no-compile -e . &&
+               # The setuptools that Python 3.11's venv adds is never used (pip builds in isolation).
+               "$PY" -m pip uninstall --quiet --yes setuptools &&
+               # The libraries' own test suites (numpy's, sympy's, matplotlib's ...) never run here.
+               find "$("$PY" -c 'import sysconfig; print(sysconfig.get_path("purelib"))')" -mindepth 2 \
+                   -type d -name tests -prune -exec rm -rf {} + &&
                "$PY" -m ipykernel install --sys-prefix --name "$KERNEL" --display-name "$KERNEL_DISPLAY_NAME" &&
                "$PY" -m grader.student.notebook quiet-kernel "$VENV/share/jupyter/kernels/$KERNEL/kernel.json" &&
                # The chapters' stored outputs (the reference engine's) shown as trusted in JupyterLab.

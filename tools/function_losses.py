@@ -37,7 +37,7 @@ def systematic_bugs() -> list[BuggySample]:
                                   for name, replacements in SHORTCUTS.items()]
 
 
-def at_stake(functions: frozenset[str], reached: dict, points: dict[str, float]) -> set[str]:
+def at_stake(functions: frozenset[str], reached: dict) -> set[str]:
     """The tests reaching any of ``functions`` (all of them if the probe saw none reached)."""
     return {name for name, found in reached.items() if found is None or found & functions}
 
@@ -53,12 +53,12 @@ def measure(slot: int = 0, progress=print) -> dict:
         if wrong:
             raise SystemExit(f"the reference fails {wrong}: fix that first")
         progress(f"probe: {time.perf_counter() - started:.0f} s")
-        functions = {f: sum(points[n] for n in at_stake(frozenset({f}), reached, points))
+        functions = {f: sum(points[n] for n in at_stake(frozenset({f}), reached))
                      for f in exercise_functions_flat()}
         bugs = []
         for bug in systematic_bugs():
             rewritten = sample_functions(bug)
-            names = at_stake(rewritten, reached, points)
+            names = at_stake(rewritten, reached)
             sample = build_buggy_sample(bug, Path(folder))
             graded = run_tests(sample, [t for t in tests if t.name in names], slot=slot)
             lost = {r.test.name: round(r.test.points - r.score, 4) for r in graded if r.score < r.test.points}

@@ -83,7 +83,8 @@ def kernel_channels():
         found["memfd"] = "made"
     except OSError as exc:
         found["memfd"] = exc.errno
-    found["subprocess"] = subprocess.run(["true"]).returncode
+    # A child process still starts (the worker's own Python: the sandbox holds no other program).
+    found["subprocess"] = subprocess.run([sys.executable, "-I", "-c", "pass"]).returncode
     return found
 
 def boom():
@@ -126,6 +127,29 @@ def read_file(path):
     with open(path) as handle:
         return handle.read()[:100]
 
+def what_is_there(paths):
+    """Per path: absent, empty (a folder or file mounted over it) or present."""
+    found = {}
+    for path in paths:
+        if not os.path.lexists(path):
+            found[path] = "absent"
+        elif os.path.isdir(path):
+            found[path] = "present" if os.listdir(path) else "empty"
+        else:
+            found[path] = "present" if os.path.getsize(path) else "empty"
+    return found
+
+def importable(names):
+    import importlib
+    found = {}
+    for name in names:
+        try:
+            importlib.import_module(name)
+            found[name] = "yes"
+        except ImportError as exc:
+            found[name] = f"no: {exc}"
+    return found
+
 def write_file(path):
     with open(path, "w") as handle:
         handle.write("pwned")
@@ -136,7 +160,7 @@ def import_reference():
     return "imported"
 
 def leave_process():
-    subprocess.Popen(["sleep", "300"])
+    subprocess.Popen([sys.executable, "-c", "import time; time.sleep(300)"])  # no other program is there
     return os.getpid()
 
 def count_processes():
@@ -437,6 +461,31 @@ def test_the_reference_solutions_cannot_be_read_or_imported(sandbox):
 
 
 @needs_bwrap
+def test_the_worker_sees_only_the_files_its_python_needs(sandbox):
+    """No headers, static libraries, tests, compilers or shells, and no installed package
+    the submission does not import; the standard library and its extension modules work."""
+    import glob
+    import sysconfig
+
+    stdlib = Path(os.__file__).resolve().parent
+    site = Path(sysconfig.get_paths()["purelib"])
+    static = [*glob.glob("/usr/lib/*/*.a")[:2], *glob.glob(f"{stdlib}/config-*/libpython*.a"),
+              *glob.glob(f"{site}/numpy/_core/lib/*.a")]
+    left_out = [p for p in ["/usr/include", str(stdlib / "test"), str(site / "numpy" / "_core" / "tests"),
+                            "/usr/bin/gcc", "/usr/bin/cc", "/bin/sh", str(site / "numpy"), *static]
+                if os.path.exists(p)]
+    assert static and str(stdlib / "test") in left_out and "/usr/include" in left_out, left_out
+    result = sandbox.call("exercises.hostile", "what_is_there", [left_out])
+    assert result.ok, result.message
+    assert {p: s for p, s in result.value.items() if s not in ("absent", "empty")} == {}
+    assert result.value["/usr/include"] == "absent" and result.value[static[0]] in ("absent", "empty")
+    names = ["test.support", "numpy", "json", "decimal", "ssl", "sqlite3", "lzma", "ctypes", "multiprocessing"]
+    result = sandbox.call("exercises.hostile", "importable", [names])
+    assert result.ok, result.message
+    assert [n for n in names if result.value[n] != "yes"] == ["test.support", "numpy"], result.value
+
+
+@needs_bwrap
 def test_writes_outside_the_sandbox_change_nothing(sandbox, tmp_path):
     target = tmp_path / "results.json"
     result = sandbox.call("exercises.hostile", "write_file", [str(target)])
@@ -488,12 +537,12 @@ def test_the_original_submission_is_never_changed(package):
 def test_a_python_installed_under_tmp_stays_visible(package, monkeypatch, tmp_path):
     # The sandbox's empty /tmp must be mounted before the Python folders are bound, or a
     # checkout (and its .venv) under /tmp, as in CI, would be hidden from the worker.
-    import grader.sandbox.process as sandbox_module
+    from grader.sandbox import mounts
 
     venv = tmp_path / ".venv"
     venv.mkdir()
     assert str(venv).startswith("/tmp/")
-    monkeypatch.setattr(sandbox_module, "python_folders", lambda: [str(venv)])
+    monkeypatch.setattr(mounts, "worker_mounts", lambda distributions: mounts.Mounts((), (str(venv),), (), (), {}))
     box = Sandbox(package)
     box.workdir = Path("/tmp/work")
     box._response_fd_in_child = 5

@@ -4,8 +4,8 @@ Isolation, strongest available first:
 
 - ``"bwrap"`` (used when bubblewrap is installed and the grader runs as root, as it
   does in CI and on Gradescope): the worker sees a private file system holding only
-  the system and Python folders (read-only), its own copy of the submission at
-  ``/sandbox`` and an empty ``/tmp``; no network, its own process namespace (every
+  the files its Python needs (read-only, :mod:`grader.sandbox.mounts`), its own copy
+  of the submission at ``/sandbox`` and an empty ``/tmp``; no network, its own process namespace (every
   process it leaves behind dies with it), and it runs as an unprivileged user of its
   own (one uid per parallel job) with no capabilities, in a user namespace of its own
   (its uid mapped to itself, nothing else: a kernel keyring and namespaces of its own).
@@ -57,7 +57,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from . import codec, seccomp
+from . import codec, mounts, seccomp
 from ..errors import GradingError
 from .isolation import decided_isolation
 from .memory_cage import MemoryCage
@@ -67,6 +67,8 @@ WORKER_FILES = ("worker.py", "codec.py")
 #: The worker's seccomp filter (None off x86-64, where the sandbox runs without one).
 SECCOMP_PROGRAM = seccomp.filter_program()
 SANDBOX_MOUNT = "/sandbox"
+#: An empty folder and an empty file of the worker folder, mounted over what is left out.
+EMPTY_FOLDER, EMPTY_FILE = "empty-folder", "empty-file"
 #: First uid of the unprivileged users the workers run as (one per parallel slot).
 SANDBOX_UID_BASE = 61000
 #: Number of uids from SANDBOX_UID_BASE the sandboxes may take (when the uid of their
@@ -364,6 +366,7 @@ class Sandbox:
         self.restarts = 0
         self._settled: tuple[int, frozenset] | None = None  # see _reap_strays
         self.broken: SandboxBroken | None = None  # set once the worker could not even start
+        self._needed: mounts.Mounts | None = None  # see _mounts
 
     # Life cycle -----------------------------------------------------------------
     def __enter__(self) -> "Sandbox":
@@ -387,6 +390,9 @@ class Sandbox:
         copy_package(self.package_dir, self.workdir / "exercises")
         tools = self.workdir / ".grader"
         tools.mkdir()
+        # Mounted over what the worker's file system leaves out (grader.sandbox.mounts).
+        (self.workdir / EMPTY_FOLDER).mkdir()
+        (self.workdir / EMPTY_FILE).touch()
         for name in WORKER_FILES:
             shutil.copyfile(HERE / name, tools / name)
         if self.uid is not None:
@@ -396,6 +402,19 @@ class Sandbox:
                     os.chown(os.path.join(root, name), self.uid, self.uid)
         os.chmod(self.workdir, stat.S_IRWXU)
 
+    def _mounts(self) -> mounts.Mounts:
+        """Only what the worker's Python needs to run this package (grader.sandbox.mounts),
+        read once per sandbox (its package is copied once)."""
+        if self._needed is None:
+            names = mounts.imported_names(self.workdir / "exercises")
+            self._needed = mounts.worker_mounts(mounts.distributions_for(names))
+        if self._needed is None:  # ELF files of a kind mounts does not read: the system folders whole
+            binds = [f for f in ["/usr", "/bin", "/lib", "/lib64", "/lib32", "/sbin", *python_folders()]
+                     if os.path.isdir(f)]
+            binds += [f for f in mounts.ETC_FILES if os.path.exists(f)]
+            self._needed = mounts.Mounts((), tuple(binds), (), (), {})
+        return self._needed
+
     def _command(self) -> list[str]:
         python = [sys.executable, "-I", "-X", "utf8", "-B", ".grader/worker.py", str(self._response_fd_in_child)]
         if self.isolation == "plain":
@@ -404,16 +423,20 @@ class Sandbox:
         # Writable folders are size-limited tmpfs: the disk a submission can fill.
         disk = str(self.limits.disk_bytes)
         cmd = ["bwrap", "--perms", "1777", "--size", disk, "--tmpfs", "/tmp"]
-        folders = [f for f in ["/usr", "/bin", "/lib", "/lib64", "/lib32", "/sbin", *python_folders()] if os.path.isdir(f)]
+        needed = self._mounts()
         # Parents that bwrap would create root-only: make them traversable by the worker's user.
-        parents = sorted({str(p) for f in folders for p in Path(f).parents if str(p) != "/"}, key=len)
+        parents = sorted({str(p) for f in [*needed.binds, *(link for _, link in needed.links)]
+                          for p in Path(f).parents if str(p) != "/"}, key=len)
         for parent in parents:
             cmd += ["--perms", "0755", "--dir", parent]
-        for folder in folders:
-            cmd += ["--ro-bind", folder, folder]
-        for name in ["/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/ld.so.conf.d", "/etc/localtime"]:
-            if os.path.exists(name):
-                cmd += ["--ro-bind", name, name]
+        for path in needed.binds:
+            cmd += ["--ro-bind", path, path]
+        for target, link in needed.links:
+            cmd += ["--symlink", target, link]
+        for folder in needed.hidden_folders:
+            cmd += ["--ro-bind", str(self.workdir / EMPTY_FOLDER), folder]
+        for file in needed.hidden_files:
+            cmd += ["--ro-bind", str(self.workdir / EMPTY_FILE), file]
         cmd += ["--perms", "0777", "--size", disk, "--tmpfs", SANDBOX_MOUNT]
         for name in ("exercises", ".grader"):
             cmd += ["--ro-bind", str(self.workdir / name), f"{SANDBOX_MOUNT}/{name}"]
@@ -421,8 +444,8 @@ class Sandbox:
                 "--proc", "/proc", "--dev", "/dev",
                 "--unshare-pid", "--unshare-net", "--unshare-ipc", "--unshare-uts", "--unshare-cgroup-try",
                 "--die-with-parent", "--new-session", "--hostname", "sandbox"]
-        drop = ["setpriv", f"--reuid={self.uid}", f"--regid={self.uid}", "--clear-groups", "--no-new-privs",
-                "--bounding-set=-all", "--inh-caps=-all"]
+        drop = [needed.programs.get("setpriv", "setpriv"), f"--reuid={self.uid}", f"--regid={self.uid}",
+                "--clear-groups", "--no-new-privs", "--bounding-set=-all", "--inh-caps=-all"]
         # A second bubblewrap, started as the sandbox's user, puts the worker in a user
         # namespace of its own (the sandbox uid mapped to itself, nothing else mapped, no
         # capability anywhere): a keyring and namespaces of its own.  It is unprivileged, so
@@ -430,8 +453,8 @@ class Sandbox:
         # loads the seccomp filter last, which then refuses any further namespace.
         # Its own process namespace too: the worker and what it starts see only their
         # own init, which ignores their signals, so they cannot stop this bubblewrap.
-        user_namespace = ["bwrap", "--unshare-user", "--uid", str(self.uid), "--gid", str(self.uid),
-                          "--unshare-pid", "--bind", "/", "/", "--chdir", SANDBOX_MOUNT,
+        user_namespace = [needed.programs.get("bwrap", "bwrap"), "--unshare-user", "--uid", str(self.uid),
+                          "--gid", str(self.uid), "--unshare-pid", "--bind", "/", "/", "--chdir", SANDBOX_MOUNT,
                           "--die-with-parent"]
         if self._seccomp_fd is not None:
             user_namespace += ["--seccomp", str(self._seccomp_fd)]

@@ -160,3 +160,27 @@ def test_no_second_serialised_form_of_a_result():
              if path not in VOCABULARY for node in ast.walk(tree)
              if isinstance(node, ast.FunctionDef) and node.name in ("to_dict", "from_dict", "as_dict")]
     assert not found, f"serialised forms outside grader/harness/outcome.py (use TestResult.to_dict): {found}"
+
+
+def test_no_second_byte_size_formatter():
+    """Sizes in bytes are written by grader.student.manifest.byte_size only: no f-string
+    elsewhere divides by 1024 (or a power of it) to print KiB, MiB or GiB."""
+    from grader.student.manifest import byte_size
+
+    def kibi(node) -> bool:
+        if isinstance(node, ast.Constant):
+            return node.value == 1024
+        return isinstance(node, ast.BinOp) and isinstance(node.op, ast.Pow) and kibi(node.left)
+
+    found = []
+    for path, tree in sources():
+        if path == GRADER / "student" / "manifest.py":
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, ast.FormattedValue):
+                for inner in ast.walk(node.value):
+                    if isinstance(inner, ast.BinOp) and isinstance(inner.op, ast.Div) and kibi(inner.right):
+                        found.append(f"{path.relative_to(GRADER)}:{node.lineno}")
+    assert not found, f"byte sizes formatted outside grader/student/manifest.py (use byte_size): {found}"
+    assert [byte_size(n) for n in (512, 12 * 1024, 64 * 1024**2, 2 * 1024**3)] == \
+        ["512 bytes", "12 KiB", "64.0 MiB", "2.0 GiB"]

@@ -84,7 +84,7 @@ from pathlib import Path, PurePosixPath
 from typing import Iterator
 
 from ..harness.package import PackageNotFound, package_folder
-from ..student.manifest import (CHUNK, COURSE_NAME, check_source_only, IGNORED_NAMES, MANIFEST_FORMAT, MANIFEST_NAME, MANIFEST_VERSION,
+from ..student.manifest import (CHUNK, COURSE_NAME, byte_size, check_source_only, IGNORED_NAMES, MANIFEST_FORMAT, MANIFEST_NAME, MANIFEST_VERSION,
                                 MAX_FILES, MAX_TOTAL_BYTES, SubmissionRefused, safe_extract, shown_name,
                                 submission_id)
 
@@ -193,10 +193,6 @@ def _absolute(path: Path) -> Path:
 
 
 # Checking before reading -----------------------------------------------------------------
-def _mib(size: int) -> str:
-    return f"{size / 1024**2:.1f} MiB" if size < 1024**3 else f"{size / 1024**3:.1f} GiB"
-
-
 def _stored_size(info: os.stat_result) -> int:
     """Bytes a file counts for: its apparent size or its allocated blocks, the larger
     (a sparse file is as large as it says, a file with preallocated blocks as large as
@@ -230,7 +226,7 @@ def check_archive_size(info: os.stat_result, name: str, limit: int = MAX_ARCHIVE
     alone: nothing is read)."""
     size = _stored_size(info)
     if size > limit:
-        raise SubmissionRefused(f"the archive {shown_name(name)} is {_mib(size)}; at most {_mib(limit)} are accepted")
+        raise SubmissionRefused(f"the archive {shown_name(name)} is {byte_size(size)}; at most {byte_size(limit)} are accepted")
     return size
 
 
@@ -285,8 +281,8 @@ def scan_folder(folder: str | os.PathLike, max_files: int = MAX_FILES, max_total
                 total += size
                 if total > max_total_bytes:
                     raise SubmissionRefused(
-                        f"the submission's files add up to more than {_mib(max_total_bytes)} ({shown} alone is "
-                        f"{_mib(size)}); at most {_mib(max_total_bytes)} are accepted")
+                        f"the submission's files add up to more than {byte_size(max_total_bytes)} ({shown} alone is "
+                        f"{byte_size(size)}); at most {byte_size(max_total_bytes)} are accepted")
                 files.append((child, info.st_size))
             else:
                 raise SubmissionRefused(f"{shown} is not a regular file (a device, a pipe or a socket); hand in "

@@ -63,6 +63,7 @@ from .pins import installed_closure, normal_name, requirement_name
 GRADER_DIR = Path(__file__).resolve().parents[1]
 REPO_ROOT = GRADER_DIR.parent
 TEMPLATES = Path(__file__).resolve().parent / "files"
+from ..student.manifest import byte_size
 from ..student.update import CHANGELOG, MARKER, MARKER_FORMAT, parse_changelog, version_key, write_originals
 from .gradescope import build_autograder_zip
 from ..harness.spec import EXERCISES
@@ -741,7 +742,7 @@ def build_release(out: str | os.PathLike, repo_root: Path = REPO_ROOT) -> Releas
                  "grader_files": list(content["grader_files"]), **kept})
         new_autograder.mkdir()
         zip_path = build_autograder_zip(out=new_autograder / "autograder.zip", repo_root=repo_root)
-        zip_line = (f"`autograder.zip`: {zip_path.stat().st_size / 1024:.0f} KiB, sha256 "
+        zip_line = (f"`autograder.zip`: {byte_size(zip_path.stat().st_size)}, sha256 "
                     f"{_sha256(zip_path)[:16]}...")
         (new_autograder / "README.md").write_text(_fill(
             (TEMPLATES / "autograder_README.md").read_text(encoding="utf-8"),
@@ -777,25 +778,21 @@ def build_release(out: str | os.PathLike, repo_root: Path = REPO_ROOT) -> Releas
 
 
 # Command line ------------------------------------------------------------------------------------------
-def _size(count: int) -> str:
-    return f"{count / 1024**2:.1f} MiB" if count >= 1024**2 else f"{count / 1024:.0f} KiB"
-
-
 def describe(release: Release) -> str:
     """What was written, for the shell."""
     sizes = release.sizes()
     student_files = len([p for p in _files(release.student)])
     lines = [f"version: {release.version}" if release.version else "version: none (no CHANGELOG.md)",
-             f"student edition: {release.student} ({student_files} files, {_size(sizes['student'])}: "
-             f"book {_size(sizes['student/book'])}, grader {_size(sizes['student/grader'])}, "
-             f"exercises {_size(sizes['student/exercises'])})",
+             f"student edition: {release.student} ({student_files} files, {byte_size(sizes['student'])}: "
+             f"book {byte_size(sizes['student/book'])}, grader {byte_size(sizes['student/grader'])}, "
+             f"exercises {byte_size(sizes['student/exercises'])})",
              f"  {len(release.notebooks)} chapter notebooks, reading pages {', '.join(release.pages)}"
              + (f", tools: {', '.join(release.tools)}" if release.tools else ""),
              f"  grader files ({len(release.grader_files)}): " + ", ".join(release.grader_files),
              f"  {release.checked_blocks} solution blocks looked for in every file: none found"
              + (f"; too short to look for: {', '.join(release.short_blocks)}" if release.short_blocks else ""),
              f"autograder: {release.autograder} (autograder.zip "
-             f"{_size((release.autograder / 'autograder.zip').stat().st_size)}, README.md)"]
+             f"{byte_size((release.autograder / 'autograder.zip').stat().st_size)}, README.md)"]
     for requirement in release.added_requirements:
         lines.append(f"note: added {requirement} to the student requirements (imported by the student edition)")
     for warning in release.warnings:

@@ -52,6 +52,7 @@ from .pins import locked, pins_for_modules
 from ..reports.results import RESULTS_NAME, write_results
 from ..harness.results_model import points
 from ..harness.spec import SpecError
+from ..student.manifest import byte_size
 from ..errors import GradingError
 
 GRADER_DIR = Path(__file__).resolve().parents[1]
@@ -344,7 +345,7 @@ def main_gradescope_zip(args: argparse.Namespace) -> int:
     path = build_autograder_zip(args.out)
     with zipfile.ZipFile(path) as archive:
         count = len(archive.infolist())
-    print(f"wrote {path} ({count} files, {path.stat().st_size / 1024:.0f} KiB): upload it as the "
+    print(f"wrote {path} ({count} files, {byte_size(path.stat().st_size)}): upload it as the "
           "autograder of a Gradescope programming assignment")
     return 0
 

@@ -27,6 +27,17 @@ MAX_FILES = 2_000
 MAX_TOTAL_BYTES = 64 * 1024**2
 
 
+def byte_size(count: int) -> str:
+    """A number of bytes as the grader writes it: ``512 bytes``, ``12 KiB``, ``3.4 MiB``, ``2.0 GiB``."""
+    if count < 1024:
+        return f"{count} bytes"
+    if count < 1024**2:
+        return f"{count / 1024:.0f} KiB"
+    if count < 1024**3:
+        return f"{count / 1024**2:.1f} MiB"
+    return f"{count / 1024**3:.1f} GiB"
+
+
 #: Longest submission id (characters).
 MAX_ID_LENGTH = 80
 
@@ -207,8 +218,8 @@ def check_directory(archive: str | os.PathLike, max_files: int = MAX_FILES,
         if count > max_files:
             raise SubmissionRefused(f"the archive holds {count} entries; at most {max_files} are accepted")
         if directory_size > max_directory_bytes:
-            raise SubmissionRefused(f"the archive's list of members takes {directory_size / 1024**2:.1f} MiB; at "
-                                    f"most {max_directory_bytes / 1024**2:.0f} MiB are accepted (zip your files "
+            raise SubmissionRefused(f"the archive's list of members takes {byte_size(directory_size)}; at "
+                                    f"most {byte_size(max_directory_bytes)} are accepted (zip your files "
                                     "again with a standard tool)")
         # The directory is found from the end record (zipfile's way: a prefix before the
         # archive shifts every offset by the same amount).
@@ -263,8 +274,8 @@ def safe_extract(archive: str | os.PathLike, destination: str | os.PathLike, max
             raise SubmissionRefused(f"the archive holds {len(members)} entries; at most {max_files} are accepted")
         declared = sum(info.file_size for info in members)
         if declared > max_total_bytes:
-            raise SubmissionRefused(f"the archive expands to {declared / 1024**2:.1f} MiB; at most "
-                                    f"{max_total_bytes / 1024**2:.0f} MiB are accepted (is it a zip bomb?)")
+            raise SubmissionRefused(f"the archive expands to {byte_size(declared)}; at most "
+                                    f"{byte_size(max_total_bytes)} are accepted (is it a zip bomb?)")
         plan: list[tuple[zipfile.ZipInfo, tuple[str, ...]]] = []
         taken: dict[tuple[str, ...], str] = {}
         for info in members:
@@ -291,7 +302,7 @@ def safe_extract(archive: str | os.PathLike, destination: str | os.PathLike, max
                         total += len(chunk)
                         if total > max_total_bytes:
                             raise SubmissionRefused(
-                                f"the archive expands to more than {max_total_bytes / 1024**2:.0f} MiB "
+                                f"the archive expands to more than {byte_size(max_total_bytes)} "
                                 "(is it a zip bomb?)")
                         sink.write(chunk)
         except SubmissionRefused:

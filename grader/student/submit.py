@@ -51,7 +51,7 @@ from pathlib import Path
 
 from ..harness.package import PackageNotFound, find_package
 from .check import CheckError, command_name, run_check
-from .manifest import (COURSE_NAME, IGNORED_NAMES, MANIFEST_FORMAT, MANIFEST_NAME, MANIFEST_VERSION, MAX_FILES,
+from .manifest import (COURSE_NAME, byte_size, IGNORED_NAMES, MANIFEST_FORMAT, MANIFEST_NAME, MANIFEST_VERSION, MAX_FILES,
                           MAX_TOTAL_BYTES, submission_id)
 
 #: Suffixes of the files that go into the zip.
@@ -89,16 +89,11 @@ class SubmitResult:
         count = len(self.left_out)
         left = f"; {count} other file{'s' if count != 1 else ''} left out" if count else ""
         who = f" for {self.manifest['student']}" if self.manifest.get("student") else ""
-        return (f"{self.file_count} files of exercises/ ({_size(self.total_bytes)}) with their sha256 in "
+        return (f"{self.file_count} files of exercises/ ({byte_size(self.total_bytes)}) with their sha256 in "
                 f"{MANIFEST_NAME}{who}{left}: hand in this zip as it is")
 
     def __repr__(self) -> str:
-        return f"<SubmitResult {self.path}: {self.file_count} files, {_size(self.total_bytes)}>"
-
-
-def _size(count: int) -> str:
-    return f"{count} bytes" if count < 1024 else f"{count / 1024:.0f} KiB" if count < 1024**2 \
-        else f"{count / 1024**2:.1f} MiB"
+        return f"<SubmitResult {self.path}: {self.file_count} files, {byte_size(self.total_bytes)}>"
 
 
 def _listed(names: list[str]) -> str:
@@ -148,7 +143,7 @@ def collect_files(package: str | os.PathLike) -> tuple[list[tuple[str, Path]], l
         raise SubmitError(f"{package.name}/ holds {len(chosen)} files to hand in; at most {MAX_FILES - 1} are accepted. "
                           "Remove files you did not write for the course, then submit again")
     if total > MAX_TOTAL_BYTES:
-        raise SubmitError(f"the files to hand in add up to {_size(total)}; at most {_size(MAX_TOTAL_BYTES)} are "
+        raise SubmitError(f"the files to hand in add up to {byte_size(total)}; at most {byte_size(MAX_TOTAL_BYTES)} are "
                           "accepted. Remove large data files, then submit again")
     if not chosen:
         raise SubmitError(f"{package} holds no file to hand in (.py, .md, .txt or .json)")
@@ -216,8 +211,8 @@ def write_submission(package: str | os.PathLike, out: str | os.PathLike | None =
                 archive.writestr(_member(member, when), data)
             total = sum(e["size"] for e in entries)
             if total > MAX_TOTAL_BYTES:  # a file grew while it was being zipped
-                raise SubmitError(f"the files to hand in add up to {_size(total)}; at most "
-                                  f"{_size(MAX_TOTAL_BYTES)} are accepted")
+                raise SubmitError(f"the files to hand in add up to {byte_size(total)}; at most "
+                                  f"{byte_size(MAX_TOTAL_BYTES)} are accepted")
             manifest = {
                 "format": MANIFEST_FORMAT,
                 "format_version": MANIFEST_VERSION,

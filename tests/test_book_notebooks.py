@@ -81,3 +81,21 @@ def test_animation_frames_are_compacted_and_the_player_kept():
         assert np.abs(_pixels(before) - _pixels(after)).mean() < 1.0
     # The player's script is untouched outside the frames' data.
     assert frame.sub("", compact) == frame.sub("", html_text)
+
+
+def test_every_chapter_opens_with_its_idea_and_tucks_its_set_up_away():
+    """A chapter starts with its title and text; its first code cell is the set-up
+    (imports and helpers: no output) and is tagged hide-input, so the book shows it as
+    a toggle and the student notebook collapses it."""
+    import nbformat
+
+    for md in book.chapter_sources():
+        nb = nbformat.read(md.with_suffix(".ipynb"), as_version=4)
+        assert nb.cells[0].cell_type == "markdown" and re.search(r"^# ", nb.cells[0].source, re.M), (
+            f"{md.name} does not open with its title")
+        first_code = next(cell for cell in nb.cells if cell.cell_type == "code")
+        assert "hide-input" in first_code.metadata.get("tags", []), (
+            f"{md.name}: its first code cell (the set-up) is not tagged hide-input")
+        assert not first_code.outputs, (
+            f"{md.name}: its first code cell shows output; keep the set-up (imports, helpers) "
+            f"in a cell of its own")

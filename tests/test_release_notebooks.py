@@ -12,6 +12,8 @@ One release is built for the module (about 6 s).  Then:
 - the reference outputs are stored once, in the notebook: the fallback of a cell finds
   them in the notebook as saved after a run (marked ``book``: about 30 s), and says so
   when a run of the student's own code was saved over them;
+- the cells the book hides (each chapter's set-up cell, figures' drawing code) open
+  collapsed in JupyterLab;
 - Fig. 3.1 draws the student's grid once the grid exercise is written (marked ``book``);
 - the kernel that ``run.sh setup`` registers starts without ipykernel's warning about
   unencrypted TCP (a real ``ipykernel install``, started as Jupyter starts it).
@@ -30,6 +32,7 @@ from pathlib import Path
 
 import pytest
 
+from grader.release.book import HIDDEN_SOURCE_TAGS, SETUP_CELL_ID
 from grader.release.edition import build_release
 
 pytestmark = pytest.mark.xdist_group("release")
@@ -177,6 +180,25 @@ def test_animation_frames_are_whole_images(release):
                 Image.open(io.BytesIO(base64.b64decode(data, validate=True))).load()
                 checked += 1
     assert checked, "no animation frame found"
+
+
+def test_cells_the_book_hides_open_collapsed_in_the_student_notebooks(release):
+    """Each chapter's set-up cell (imports, helpers) and its figures' drawing code are
+    tagged hide-input: a toggle in the book, a collapsed source in JupyterLab."""
+    collapsed = 0
+    for path in sorted((release.student / "book").glob("*.ipynb")):
+        nb = _notebook(path)
+        first_code = next(cell for cell in nb["cells"] if cell["cell_type"] == "code"
+                          and cell["id"] != SETUP_CELL_ID)
+        assert "hide-input" in first_code["metadata"].get("tags", []), f"{path.name}: set-up cell shown"
+        for cell in nb["cells"]:
+            if cell["cell_type"] != "code":
+                continue
+            hidden = any(tag in HIDDEN_SOURCE_TAGS for tag in cell["metadata"].get("tags", []))
+            source_hidden = cell["metadata"].get("jupyter", {}).get("source_hidden", False)
+            assert source_hidden == hidden, f"{path.name}, cell {cell['id']}"
+            collapsed += source_hidden
+    assert collapsed, "no collapsed cell in any student notebook"
 
 
 # The fallback reads the notebook as saved -------------------------------------------------------------------

@@ -48,6 +48,10 @@ TARGET_PACKAGE = "exercises"
 MAGIC = "reference_fallback"
 READING_PAGES = ("intro", "conventions", "glossary")
 SETUP_CELL_ID = "student-edition-setup"
+#: myst-nb tags under which the built book hides a cell's source (a set-up cell of
+#: imports and helpers, a figure's drawing code).  The student notebook collapses those
+#: sources instead (JupyterLab's ``jupyter.source_hidden``; a click shows them).
+HIDDEN_SOURCE_TAGS = ("hide-input", "remove-input")
 SETUP_SOURCE = (
     "# Student edition: the cells below run on your exercises package.  A cell that needs a\n"
     "# function you have not written yet says so and shows the reference engine's output.\n"
@@ -529,6 +533,8 @@ def student_notebook(nb, stem: str, converter: MystToMarkdown):
             cell.metadata[METADATA_KEY] = {"digest": outputs_digest(cell.outputs)}
             source = f"%%{MAGIC} {stem}:{cell_id}\n{source}"
         cell.source = source
+        if any(tag in HIDDEN_SOURCE_TAGS for tag in cell.get("metadata", {}).get("tags", [])):
+            cell.metadata.setdefault("jupyter", {})["source_hidden"] = True
         cells.append(cell)
         figure = cell.get("metadata", {}).get("mystnb", {}).get("figure")
         if isinstance(figure, dict) and (figure.get("name") or figure.get("caption")):

@@ -240,8 +240,9 @@ def _few_candidate_pairs(aabb, dynamic, jointed, work, swept, keys, key_i, key_j
 
 @njit(cache=True)
 def _kept_pairs(first, second, found, dynamic, jointed, keys, key_i, key_j):
-    """Of the first ``found`` sorted pairs, those not both static and not joined
-    (``jointed``: sorted keys, padded with ``NO_PAIR``) into ``keys`` (``i * n + j``),
+    """Of the first ``found`` sorted pairs, those not both static (``dynamic``: per body,
+    True or a nonzero inverse mass for a dynamic one) and not joined (``jointed``:
+    sorted keys, padded with ``NO_PAIR``) into ``keys`` (``i * n + j``),
     ``key_i`` and ``key_j`` (which may be ``first`` and ``second``: written at or before
     each pair read); returns how many."""
     n = dynamic.shape[0]
@@ -253,7 +254,7 @@ def _kept_pairs(first, second, found, dynamic, jointed, keys, key_i, key_j):
         keys[kept], key_i[kept], key_j[kept] = key, i, j
         while joined < jointed.shape[0] and jointed[joined] < key:
             joined += 1
-        keep = (dynamic[i] or dynamic[j]) and not (joined < jointed.shape[0] and jointed[joined] == key)
+        keep = (dynamic[i] != 0 or dynamic[j] != 0) and not (joined < jointed.shape[0] and jointed[joined] == key)
         kept += 1 if keep else 0
     return kept
 
@@ -659,10 +660,13 @@ def _zero_static_velocities(velocity, static_members):
 
 
 @njit(cache=True)
-def _soft_step(position, angle, velocity, dynamic, turning, properties, ints, floats):
-    """One soft step of the world (module docstring) on its state (``position`` to
-    ``properties``: the bodies' extents, inverse masses and inertias, friction and
-    restitution, read every step, columns as :mod:`~solutions.body_state` names them)
+def _soft_step(position, angle, velocity, properties, ints, floats):
+    """One soft step of the world (module docstring) on its state (``position``,
+    ``angle``, ``velocity`` and ``properties``: the bodies' extents, inverse masses and
+    inertias, friction and restitution, read every step, columns as
+    :mod:`~solutions.body_state` names them; a body is dynamic where its inverse mass is
+    not 0 and turns where its inverse inertia is not, as the state's ``dynamic`` and
+    ``turning`` say)
     with the sections of ``ints`` and ``floats`` (:func:`_layout`): ``parameters`` and
     ``switches`` (``PARAMETER_*``, ``SWITCH_*``), the joints' constants (``JOINT_*``)
     and impulses.  The contact
@@ -676,13 +680,12 @@ def _soft_step(position, angle, velocity, dynamic, turning, properties, ints, fl
     # allocates, here; fewer bodies are swept in _step_on_pairs, without allocating.
     if angle.shape[0] < STRIP_GRID_MIN_BODIES:
         none = ints[:0]
-        return _step_on_pairs(none, none, none, position, angle, velocity, dynamic, turning, properties, ints,
-                              floats)
+        return _step_on_pairs(none, none, none, position, angle, velocity, properties, ints, floats)
     switches, _, joint_ints, _, _, parameters, _, _, _, work_floats = _sections(angle.shape[0], ints, floats)
     _, aabb = _faces_and_aabbs(position, angle, properties[:, EXTENT_X:EXTENT_Y + 1], parameters[PARAMETER_MARGIN],
                                switches[SWITCH_CIRCLES] != 0, switches[SWITCH_CORNER_ROUNDING], work_floats)
-    keys, key_i, key_j = _candidate_pairs(aabb, dynamic, joint_ints[JOINT_PAIRS])
-    return _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turning, properties, ints, floats)
+    keys, key_i, key_j = _candidate_pairs(aabb, properties[:, INVERSE_MASS], joint_ints[JOINT_PAIRS])
+    return _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, ints, floats)
 
 
 @njit(cache=True, inline="always")
@@ -708,7 +711,7 @@ def _sections(n, ints, floats):
 #: of one, and the caller holds the arguments for the whole call.  Its arguments are
 #: distinct arrays, which LLVM is told (:class:`~solutions.no_alias_compiler.NoAliasCompiler`).
 @njit(cache=True, _nrt=False, pipeline_class=NoAliasCompiler)
-def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turning, properties, ints, floats):
+def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, ints, floats):
     """The rest of :func:`_soft_step` from the candidate pairs ``keys`` (``i * n + j``),
     ``key_i`` and ``key_j``: manifolds, prestep, sub-steps, restitution, memory.  For
     fewer than ``STRIP_GRID_MIN_BODIES`` bodies the pairs come empty and are found here
@@ -746,7 +749,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turni
     few_j, ii = _take(work_ints, ii, capacity)
     if n < STRIP_GRID_MIN_BODIES:       # 1. candidate pairs (for more bodies: _soft_step's)
         faces, aabb = _faces_and_aabbs(position, angle, half, margin, circles, corner_rounding, work_floats)
-        m = _few_candidate_pairs(aabb, dynamic, jointed, few_work, work_floats[20 * n:24 * n].reshape((n, 4)),
+        m = _few_candidate_pairs(aabb, inverse_mass, jointed, few_work, work_floats[20 * n:24 * n].reshape((n, 4)),
                                  few_keys, few_i, few_j)
         if m < 0:
             return capacity + n
@@ -936,11 +939,11 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turni
         in_contact[a[k]] = in_contact[b[k]] = True
     static_count = 0
     for i in range(n):
-        static_count += 1 if in_contact[i] and not dynamic[i] else 0
+        static_count += 1 if in_contact[i] and inverse_mass[i] == 0.0 else 0
     static_members, ii = _take(work_ints, ii, static_count)
     static_count = 0
     for i in range(n):
-        if in_contact[i] and not dynamic[i]:
+        if in_contact[i] and inverse_mass[i] == 0.0:
             static_members[static_count] = i
             static_count += 1
 
@@ -955,7 +958,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turni
     joint_rows = -1     # joint rows made at the current poses (-1: none yet)
     for _ in range(substeps):
         for i in range(n):
-            if dynamic[i]:
+            if inverse_mass[i] != 0.0:      # dynamic
                 velocity[i, 0] += h * gravity_x
                 velocity[i, 1] += h * gravity_y
         for biased in (True, False):
@@ -998,10 +1001,10 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, dynamic, turni
                 joint_rows = -1                 # the positions move next
             if biased:      # positions between the two passes
                 for i in range(n):
-                    if dynamic[i]:
+                    if inverse_mass[i] != 0.0:      # dynamic
                         position[i, 0] += h * velocity[i, 0]
                         position[i, 1] += h * velocity[i, 1]
-                    if turning[i]:
+                    if inverse_inertia[i] != 0.0:       # turning
                         angle[i] += h * velocity[i, 2]
                 if relax and joint_a.shape[0]:
                     joint_rows = _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats,
@@ -1109,8 +1112,8 @@ class CompiledSoftStep:
             self._write_parameters(h, settings)
             self._settings_key = key
         while True:
-            needed = _soft_step(state.position, state.angle, state.velocity, state.dynamic, state.turning,
-                                state.properties, self.ints, self.floats)
+            needed = _soft_step(state.position, state.angle, state.velocity, state.properties, self.ints,
+                                self.floats)
             if not needed:
                 break
             self.make_buffers(2 * needed)        # nothing changed: step again

@@ -12,8 +12,9 @@ the first frames, which build the trees, are not timed):
 
 - **numba tree** (:class:`solutions.broadphase.dynamic_tree_numba.DynamicTreeNumba`,
   margin 0.1 m): the new boxes computed from the velocities (numpy), ``move_all`` (a
-  body that left its fat box is reinserted), then every body's partners found by its
-  tight box (``pairs_unsorted``).
+  body that left its fat box gets a new one, the enlarged part of the tree is rebuilt
+  and the moved bodies' fat boxes search it), then the candidate pairs whose tight
+  boxes meet (``pairs_unsorted``).
 - **pymunk BB tree** (Chipmunk's ``cpBBTree``, pymunk's default index): every box a
   kinematic body with its velocity and a ``Poly`` box shape; one ``space.step`` moves
   the bodies, refits the moved leaves and finds every pair of touching bounding boxes.
@@ -164,7 +165,7 @@ def report(rows: list[dict]) -> str:
     for row in rows:
         ms = row["ms"]
         lines.append(f"N = {row['n']}: {row['pairs']} pairs a frame, {row['reinserted_per_frame']:.0f} reinsertions "
-                     f"a frame; numba tree {ms[PYMUNK_TREE] / ms[NUMBA_TREE]:.1f}x faster than pymunk's BB tree, "
+                     f"a frame; numba tree at {ms[PYMUNK_TREE] / ms[NUMBA_TREE]:.2f}x the speed of pymunk's BB tree, "
                      f"{ms[NUMBA_GRID] / ms[NUMBA_TREE]:.2f}x the speed of the numba grid; pairs equal to the grid's: "
                      f"{row['tree_equals_grid']}, to pymunk's: {row['tree_equals_pymunk']} "
                      f"({row['pymunk_pairs']} pymunk pairs)")

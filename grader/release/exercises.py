@@ -89,6 +89,7 @@ EXERCISES: dict[str, str | dict[str, str]] = {
                                        "collide_polygon_polygon": "contacts"},
     "response/impulse.py": "impulse",
     "solver/contact_point.py": "sequential",
+    "solver/contact_sweeps.py": "sequential",
     "response/positional_correction.py": "impulse",
 }
 #: The comment lines above each student file (:func:`header`): what it is, how to check

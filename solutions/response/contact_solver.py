@@ -234,7 +234,16 @@ class ContactSolver(ContactPreparation):
         solve_constraints(velocity, c.rows, settings.iterations, sweep_normal, sweep_tangent, target, rigid,
                           no_softness, accumulate=accumulate, friction_first=accumulate)
         c.normal_total[c.order], c.tangent_total[c.order] = sweep_normal, sweep_tangent
+        self._split_impulse(c, velocity, position_bias)
+        return velocity
 
+    def _split_impulse(self, c: PreparedContacts, velocity: np.ndarray, position_bias: np.ndarray) -> None:
+        """Step 5 of the module docstring (with ``position_correction="split_impulse"``), and
+        the poses at the solve that :meth:`correct_positions` measures from."""
+        settings = self.settings
+        accumulate = settings.accumulate_impulses
+        solve_constraints = kernel(self.backend)
+        rigid, no_softness = np.ones(c.point_count), np.zeros(c.point_count)
         # 5. Split impulse: the same sweeps on pseudo-velocities, no friction, no warm start.
         if settings.position_correction == "split_impulse" and c.point_count:
             pseudo_impulse = np.zeros(c.point_count)
@@ -247,7 +256,6 @@ class ContactSolver(ContactPreparation):
                                        for index, k in c.local.items() if not c.members[k].is_static}
         self._poses_at_solve = {index: (*c.centre[k].tolist(), float(c.members[k].angle))
                                 for index, k in c.local.items()}
-        return velocity
 
     def position_bias(self, depth: np.ndarray, dt: float) -> np.ndarray:
         """Separating speed (m/s) that removes ``baumgarte`` of the overlap beyond

@@ -22,7 +22,8 @@ import pytest
 import sympy as sp
 
 from grader.harness.compare import number, show
-from grader.harness.credit import check_cases
+from grader.harness.credit import check_cases, fail
+from grader.oracles import upright_scenes as scenes
 
 MODULE = "solver.contact_point"
 FIELDS = ("nx", "ny", "rn_a", "rn_b", "rt_a", "rt_b", "ima", "imb", "iia", "iib", "mass_normal", "mass_tangent",
@@ -245,3 +246,326 @@ def test_visits_converge(student):
     assert abs(totals[0] - g * h / 2) < 1e-9 and abs(totals[1] - g * h / 2) < 1e-9, \
         f"after 60 sweeps the corners carry {totals} N s, not m g h / 2 = {g * h / 2:.6f} N s each"
     assert max(abs(v) for v in velocity_b) < 1e-9, f"the box still moves: {velocity_b}"
+
+
+# The prestep and the sweeps (solver/contact_sweeps.py) ----------------------------------
+SWEEPS = "solver.contact_sweeps"
+PRESTEP_FIELDS = ("point", "normal", "centre_a", "centre_b", "ima", "imb", "iia", "iib", "friction")
+
+
+def expected_prestep(point, normal, centre_a, centre_b, ima, imb, iia, iib, friction):
+    """The 14 fields: lever arms r = p - centre crossed with n and t = (ny, -nx), the
+    effective masses from the Jacobians (sympy, :func:`point_of`), ``lower = 0``."""
+    nx, ny = normal
+    arms = [(point[0] - c[0], point[1] - c[1]) for c in (centre_a, centre_b)]
+    rn = [rx * ny - ry * nx for rx, ry in arms]
+    rt = [rx * -nx - ry * ny for rx, ry in arms]
+    return point_of(nx, ny, rn[0], rn[1], rt[0], rt[1], ima, imb, iia, iib, friction)
+
+
+def prestep_cases(seed: int, count: int) -> list[tuple]:
+    # A disc of radius 0.5 m (1 kg, 1/I = 8) on static ground: m_n = 1 kg, m_t = 1/3 kg.
+    cases = [(([0.0, 0.0], [0.0, 1.0], [0.0, -0.5], [0.0, 0.5], 0.0, 1.0, 0.0, 8.0, 0.6), "a disc on the ground"),
+             # A box corner off centre: the normal lever arm spins it (rn_B = -0.5 m).
+             (([-0.5, 0.0], [0.0, 1.0], [0.0, -0.5], [0.0, 0.5], 0.0, 1.0, 0.0, 6.0, 0.5), "a box's corner"),
+             # Two static bodies: nothing moves, both effective masses are 0.
+             (([0.0, 0.0], [1.0, 0.0], [-1.0, 0.0], [1.0, 0.0], 0.0, 0.0, 0.0, 0.0, 0.5), "two static bodies"),
+             # A body that cannot turn (1/I = 0): the lever arms count for nothing.
+             (([0.3, 0.1], [0.6, 0.8], [0.0, 0.0], [1.0, 1.0], 0.5, 0.25, 0.0, 0.0, 0.2), "no rotation")]
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        angle = rng.uniform(0.0, 2 * math.pi)
+        static_a = rng.random() < 0.3
+        ima, iia = (0.0, 0.0) if static_a else (float(rng.uniform(0.1, 2.0)), float(rng.uniform(0.2, 6.0)))
+        centres = [[float(x) for x in rng.uniform(-2.0, 2.0, 2)] for _ in range(2)]
+        cases.append(((([float(x) for x in rng.uniform(-2.0, 2.0, 2)]), [math.cos(angle), math.sin(angle)],
+                       *centres, ima, float(rng.uniform(0.1, 2.0)), iia, float(rng.uniform(0.2, 6.0)),
+                       float(rng.uniform(0.0, 1.0))), "static A" if static_a else "two free bodies"))
+    return cases
+
+
+def point_problem(got, want) -> str | None:
+    if not isinstance(got, list) or len(got) != len(FIELDS):
+        return f"prestep_point must return a ContactPoint (its {len(FIELDS)} fields), got {show(got)}"
+    for name, g, w in zip(FIELDS, got, want):
+        problem = number(name, g, w, rtol=TOLERANCE, atol=TOLERANCE)
+        if problem:
+            return problem
+    return None
+
+
+def describe_call(function: str, args, names) -> str:
+    return f"{function}(" + ", ".join(f"{n}={show(a)}" for n, a in zip(names, args)) + ")"
+
+
+@pytest.mark.points(2)
+@pytest.mark.partial_credit
+@pytest.mark.title("Prestep: a contact point's lever arms and effective masses (hand-worked and random points)")
+def test_prestep_point(student):
+    cases = prestep_cases(811, 30)
+    answers = student.call_many(SWEEPS, "prestep_point", [list(args) for args, _ in cases])
+
+    def problem_of(case_answer):
+        (args, note), got = case_answer
+        problem = point_problem(got, expected_prestep(*args))
+        return None if problem is None else f"{problem} [{note}]"
+
+    check_cases(list(zip(cases, answers)), problem_of, "prestep points",
+                describe=lambda ca: describe_call("prestep_point", ca[0][0], PRESTEP_FIELDS),
+                category=lambda ca: ca[0][1])
+
+
+TARGET_FIELDS = ("normal_velocity", "restitution", "depth", "dt", "restitution_threshold", "bias_factor", "slop",
+                 "max_push")
+
+
+def expected_target(normal_velocity, restitution, depth, dt, threshold, bias_factor, slop, max_push):
+    """The larger of the bounce (only above the threshold) and the capped Baumgarte push."""
+    bounce = -restitution * normal_velocity if -normal_velocity > threshold else 0.0
+    return max(bounce, min(bias_factor * max(depth - slop, 0.0) / dt, max_push))
+
+
+TARGET_CASES = [
+    ((-4.0, 0.5, 0.0, 1 / 60, 1.0, 0.0, 0.005, 3.0), "a fast impact bounces at e times its speed"),
+    ((-0.5, 0.5, 0.0, 1 / 60, 1.0, 0.0, 0.005, 3.0), "a slow impact (a resting contact) does not bounce"),
+    ((-0.5, 0.5, 0.0, 1 / 60, 0.2, 0.0, 0.005, 3.0), "a lower threshold lets it bounce"),
+    ((2.0, 0.5, 0.0, 1 / 60, 1.0, 0.0, 0.005, 3.0), "a separating point: no bounce"),
+    ((0.0, 0.0, 0.105, 0.01, 1.0, 0.2, 0.005, 3.0), "an overlap is pushed out"),
+    ((0.0, 0.0, 0.004, 0.01, 1.0, 0.2, 0.005, 3.0), "an overlap within the slop is left"),
+    ((0.0, 0.0, 0.105, 0.01, 1.0, 0.2, 0.005, 1.0), "the push is capped"),
+    ((0.0, 0.0, 0.105, 0.01, 1.0, 0.0, 0.005, 3.0), "no push without a bias factor"),
+    ((-3.0, 0.5, 0.105, 0.01, 1.0, 0.2, 0.005, 3.0), "bounce and push: the larger"),
+    ((-3.0, 0.8, 0.105, 0.01, 1.0, 0.2, 0.005, 3.0), "bounce and push: the larger (the bounce)"),
+]
+
+
+def random_targets(seed: int, count: int) -> list[tuple]:
+    rng = np.random.default_rng(seed)
+    return [((float(rng.uniform(-5.0, 2.0)), float(rng.uniform(0.0, 1.0)), float(rng.uniform(-0.01, 0.2)),
+              float(rng.choice([1 / 60, 1 / 240, 0.01])), float(rng.uniform(0.0, 2.0)), float(rng.uniform(0.0, 0.5)),
+              float(rng.uniform(0.0, 0.02)), float(rng.uniform(0.5, 5.0))), "random") for _ in range(count)]
+
+
+@pytest.mark.points(2)
+@pytest.mark.partial_credit
+@pytest.mark.title("Prestep: the target velocity (restitution threshold, Baumgarte push)")
+def test_contact_target(student):
+    cases = TARGET_CASES + random_targets(812, 40)
+    answers = student.call_many(SWEEPS, "contact_target", [list(args) for args, _ in cases])
+
+    def problem_of(case_answer):
+        (args, note), got = case_answer
+        problem = number("the target (m/s)", got, expected_target(*args), rtol=TOLERANCE, atol=TOLERANCE)
+        return None if problem is None else f"{problem} [{note}]"
+
+    check_cases(list(zip(cases, answers)), problem_of, "contact targets",
+                describe=lambda ca: describe_call("contact_target", ca[0][0], TARGET_FIELDS),
+                category=lambda ca: ca[0][1])
+
+
+def expected_sweeps(velocity, manifolds, iterations):
+    """Warm start, then per sweep and manifold every friction visit, then every normal
+    visit (the visits of this module's expected_friction / expected_normal)."""
+    velocity = [list(v) for v in velocity]
+    normal = [list(m[4]) for m in manifolds]
+    tangent = [list(m[5]) for m in manifolds]
+    _, _, response = row_algebra()
+    for m, (a, b, points, _, _, _) in enumerate(manifolds):
+        for k, point in enumerate(points):
+            nx, ny, rn_a, rn_b, rt_a, rt_b, ima, imb, iia, iib = point[:10]
+            dn = response(nx, ny, rn_a, rn_b, ima, imb, iia, iib)
+            dt = response(ny, -nx, rt_a, rt_b, ima, imb, iia, iib)
+            change = [normal[m][k] * x + tangent[m][k] * y for x, y in zip(dn, dt)]
+            velocity[a] = list(np.add(velocity[a], change[:3]))
+            velocity[b] = list(np.add(velocity[b], change[3:]))
+    for _ in range(iterations):
+        for m, (a, b, points, targets, _, _) in enumerate(manifolds):
+            for k, point in enumerate(points):
+                velocity[a], velocity[b], tangent[m][k] = expected_friction(velocity[a], velocity[b], point,
+                                                                            normal[m][k], tangent[m][k])
+            for k, point in enumerate(points):
+                velocity[a], velocity[b], normal[m][k] = expected_normal(velocity[a], velocity[b], point,
+                                                                         normal[m][k], targets[k])
+    return velocity, normal, tangent
+
+
+def random_sweep_cases(seed: int, count: int) -> list[tuple]:
+    """Three bodies (0 static), two or three manifolds of one or two points each."""
+    rng = np.random.default_rng(seed)
+    cases = []
+    for index in range(count):
+        velocity = [[0.0, 0.0, 0.0]] + [[float(v) for v in rng.normal(0.0, 1.0, 3)] for _ in range(2)]
+        inverse = [(0.0, 0.0)] + [(float(rng.uniform(0.2, 2.0)), float(rng.uniform(0.5, 6.0))) for _ in range(2)]
+        manifolds = []
+        for a, b in [(0, 1), (1, 2), (0, 2)][:2 + index % 2]:
+            angle = rng.uniform(0.0, 2 * math.pi)
+            count_points = 1 + int(rng.random() < 0.6)
+            points = [point_of(math.cos(angle), math.sin(angle), *[float(x) for x in rng.uniform(-0.6, 0.6, 4)],
+                               inverse[a][0], inverse[b][0], inverse[a][1], inverse[b][1],
+                               float(rng.uniform(0.0, 1.0))) for _ in range(count_points)]
+            manifolds.append([a, b, points, [float(x) for x in rng.uniform(0.0, 0.5, count_points)],
+                              [float(x) for x in rng.uniform(0.0, 0.3, count_points)],
+                              [float(x) for x in rng.uniform(-0.1, 0.1, count_points)]])
+        cases.append(((velocity, manifolds, int(rng.integers(0, 5))), "warm started"))
+    return cases
+
+
+def sweep_problem(got, want) -> str | None:
+    if not (isinstance(got, list) and len(got) == 3 and isinstance(got[0], list) and len(got[0]) == len(want[0])):
+        return f"sweep_contacts must return (velocities, normal totals, tangent totals), got {show(got)[:300]}"
+    for i, (g, w) in enumerate(zip(got[0], want[0])):
+        if not isinstance(g, list) or len(g) != 3:
+            return f"the velocity of body {i} must be (vx, vy, w), got {show(g)}"
+        for name, x, y in zip(("vx", "vy", "w"), g, w):
+            problem = number(f"{name} of body {i}", x, y, rtol=1e-7, atol=1e-7)
+            if problem:
+                return problem
+    for label, got_totals, want_totals in (("normal", got[1], want[1]), ("friction", got[2], want[2])):
+        if not isinstance(got_totals, list) or len(got_totals) != len(want_totals):
+            return f"the {label} totals must be one list per manifold, got {show(got_totals)[:200]}"
+        for m, (g, w) in enumerate(zip(got_totals, want_totals)):
+            if not isinstance(g, list) or len(g) != len(w):
+                return f"manifold {m}: one accumulated {label} impulse per point expected, got {show(g)}"
+            for k, (x, y) in enumerate(zip(g, w)):
+                problem = number(f"manifold {m}, point {k}: the accumulated {label} impulse", x, y, rtol=1e-7,
+                                 atol=1e-7)
+                if problem:
+                    return problem
+    return None
+
+
+@pytest.mark.points(2)
+@pytest.mark.partial_credit
+@pytest.mark.title("Sweeps: warm start, then friction and normal visits manifold by manifold (random manifolds)")
+def test_sweep_contacts(student):
+    # A disc falling at 2 m/s, remembering 2 N s: the warm start alone stops it.
+    disc = point_of(0.0, 1.0, 0.0, 0.0, 0.0, 0.5, 0.0, 1.0, 0.0, 8.0, 0.5)
+    cases = [(([[0.0, 0.0, 0.0], [0.0, -2.0, 0.0]], [[0, 1, [disc], [0.0], [2.0], [0.0]]], 0),
+              "warm start only"),
+             (([[0.0, 0.0, 0.0], [0.0, -2.0, 0.0]], [[0, 1, [disc], [0.0], [0.0], [0.0]]], 1), "one sweep"),
+             (([[0.0, 0.0, 0.0], [1.0, -2.0, 0.0]], [[0, 1, [disc], [0.5], [0.0], [0.3]]], 3),
+              "sliding, bouncing, warm started")] + random_sweep_cases(813, 25)
+    answers = student.call_many(SWEEPS, "sweep_contacts", [list(args) for args, _ in cases])
+
+    def problem_of(case_answer):
+        (args, note), got = case_answer
+        problem = sweep_problem(got, expected_sweeps(*args))
+        return None if problem is None else f"{problem} [{note}]"
+
+    check_cases(list(zip(cases, answers)), problem_of, "sweeps",
+                describe=lambda ca: describe_call("sweep_contacts", ca[0][0], ("velocity", "manifolds",
+                                                                               "iterations")),
+                category=lambda ca: ca[0][1])
+
+
+def scene_calls(student, scene: str):
+    """``call_many`` for :mod:`grader.oracles.upright_scenes`: the student's functions
+    through the sandbox, their answers checked for shape before the scene uses them."""
+    def call_many(name, cases):
+        answers = student.call_many(SWEEPS, name, [list(case) for case in cases])
+        try:
+            if name == "prestep_point":
+                ok = all(len(a) == len(FIELDS) and all(map(math.isfinite, a)) for a in answers)
+            elif name == "contact_target":
+                ok = all(math.isfinite(a) for a in answers)
+            else:
+                velocity, normal, tangent = answers[0]
+                ok = (all(len(v) == 3 and all(map(math.isfinite, v)) for v in velocity)
+                      and all(all(map(math.isfinite, n)) for n in normal + tangent))
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            fail(f"{scene}: {name} returned {show(answers)[:300]}, not what its docstring says")
+        return answers
+    return call_many
+
+
+@pytest.mark.points(2)
+@pytest.mark.title("Scene: a stack of ten boxes carries the complementarity answer (10 sweeps, 1 s)")
+def test_stack_loads(student):
+    """Ten 1 kg boxes that cannot turn, stacked on the ground; contact k from the bottom
+    carries the weight of the boxes above it, (10 - k) m g h per step."""
+    scene = "the stack of ten boxes"
+    boxes = [scenes.Upright(1.0, 0.5, 0.5, y=0.5 + k, friction=0.6, turns=False) for k in range(10)]
+    settings, memory = scenes.SceneSettings(iterations=10, bias_factor=0.0), {}
+    for _ in range(60):
+        manifolds = scenes.step_scene(boxes, scene_calls(student, scene), settings, memory, stacked=True)
+    loads = [sum(normal) for _, _, normal in manifolds]
+    want = [(10 - k) * scenes.G * settings.dt for k in range(10)]
+    worst = int(np.argmax([abs(g - w) / w for g, w in zip(loads, want)] + [0.0] * (10 - len(loads))))
+    if len(loads) != 10 or abs(loads[worst] - want[worst]) > 1e-3 * want[worst]:
+        fail(f"{scene} after 1 s: contact {worst} from the ground carries "
+             f"{loads[worst] if worst < len(loads) else 0.0:.6g} N s a step, the weight of the {10 - worst} boxes "
+             f"above it is {want[worst]:.6g} N s (all: {np.round(loads, 5).tolist()})")
+    speed = max(abs(box.velocity[1]) for box in boxes)
+    assert speed < 2e-3, f"{scene} after 1 s: a box still moves at {speed:.3g} m/s"
+
+
+@pytest.mark.points(2)
+@pytest.mark.title("Scene: warm started, the stack stands with 4 sweeps a step (cold, it sinks)")
+def test_warm_started_stack(student):
+    """With last step's impulses given back first, four sweeps a step hold the ten boxes:
+    after 2 s none moves faster than 1 cm/s and the top one sank less than 10 cm.  Cold
+    (no warm start) the same sweeps let the stack sink by metres."""
+    scene = "the stack of ten boxes with 4 sweeps a step"
+    boxes = [scenes.Upright(1.0, 0.5, 0.5, y=0.5 + k, friction=0.6, turns=False) for k in range(10)]
+    settings, memory = scenes.SceneSettings(iterations=4, bias_factor=0.0), {}
+    for _ in range(120):
+        scenes.step_scene(boxes, scene_calls(student, scene), settings, memory, stacked=True)
+    sunk = 9.5 - boxes[-1].y
+    speed = max(abs(box.velocity[1]) for box in boxes)
+    assert sunk < 0.1 and speed < 1e-2, (f"{scene} after 2 s: the top box sank {sunk:.3f} m and a box moves at "
+                                         f"{speed:.3g} m/s (warm started, it sinks a few cm and rests)")
+
+
+@pytest.mark.points(2)
+@pytest.mark.title("Scene: a box sliding at 3 m/s stops after v^2 / (2 mu g) (friction)")
+def test_sliding_box_stops(student):
+    scene = "the box sliding at 3 m/s (mu = 0.5)"
+    box = scenes.Upright(1.0, 0.5, 0.5, y=0.5, velocity=[3.0, 0.0, 0.0], friction=0.5)
+    settings, memory = scenes.SceneSettings(), {}
+    for _ in range(200):
+        scenes.step_scene([box], scene_calls(student, scene), settings, memory)
+    want = 3.0 ** 2 / (2 * 0.5 * scenes.G) - 3.0 * settings.dt / 2      # the stepped distance
+    assert abs(box.x - want) < 0.01 * want and abs(box.velocity[0]) < 1e-6, (
+        f"{scene}: it stopped after {box.x:.4f} m (v = {box.velocity[0]:.3g} m/s); Coulomb friction stops it "
+        f"after {want:.4f} m")
+
+
+@pytest.mark.points(1)
+@pytest.mark.title("Scene: a ball kicked up off the ground rises v^2 / 2g (a contact never pulls)")
+def test_kicked_ball_rises(student):
+    scene = "the ball kicked up at 4 m/s"
+    ball = scenes.Upright(1.0, radius=0.5, y=0.5, velocity=[0.0, 4.0, 0.0])
+    settings, memory, top = scenes.SceneSettings(), {}, 0.5
+    for _ in range(30):
+        scenes.step_scene([ball], scene_calls(student, scene), settings, memory)
+        top = max(top, ball.y)
+    want = 4.0 ** 2 / (2 * scenes.G) - 4.0 * settings.dt / 2
+    assert abs(top - 0.5 - want) < 1e-3, f"{scene}: it rose {top - 0.5:.4f} m, {want:.4f} m expected"
+
+
+@pytest.mark.points(1)
+@pytest.mark.title("Scene: a resting ball with e = 0.5 stays on the ground (the restitution threshold)")
+def test_resting_ball_stays(student):
+    scene = "the ball resting on the ground (e = 0.5)"
+    ball = scenes.Upright(1.0, radius=0.5, y=0.5, restitution=0.5)
+    settings, memory, heights = scenes.SceneSettings(), {}, []
+    for _ in range(120):
+        scenes.step_scene([ball], scene_calls(student, scene), settings, memory)
+        heights.append(ball.y - 0.5)
+    assert max(map(abs, heights)) < 1e-4, (f"{scene}: its centre moves between {min(heights) * 1e3:+.2f} and "
+                                           f"{max(heights) * 1e3:+.2f} mm: gravity's {scenes.G / 60:.3f} m/s a step "
+                                           "must not bounce")
+
+
+@pytest.mark.points(1)
+@pytest.mark.title("Scene: a ball hitting the ground at 5 m/s leaves at e v whatever the number of sweeps")
+def test_bounce_whatever_the_sweeps(student):
+    for iterations in (1, 2, 3, 10):
+        ball = scenes.Upright(1.0, radius=0.5, y=0.5, velocity=[0.0, -5.0 + scenes.G / 60, 0.0], restitution=0.8)
+        scenes.step_scene([ball], scene_calls(student, "the bouncing ball"),
+                          scenes.SceneSettings(iterations=iterations), {})
+        assert abs(ball.velocity[1] - 4.0) < 1e-9, (f"the ball hitting the ground at 5 m/s with e = 0.8 leaves at "
+                                                    f"{ball.velocity[1]:+.4f} m/s after {iterations} sweeps, "
+                                                    "+4 m/s expected (the target is fixed before the sweeps)")

@@ -24,14 +24,20 @@ from grader.harness.compare import show
 from grader.harness.credit import check_cases, fail
 from grader.harness.student_code import register
 from grader.sandbox.codec import is_number
-from grader.tests.public.test_sequential import answer_problem, describe, random_cases, random_joint_rows
+from grader.tests.public.test_sequential import (SWEEPS, answer_problem, describe, point_problem, prestep_cases,
+                                                 random_cases, random_joint_rows, random_sweep_cases,
+                                                 random_targets, scene_calls, sweep_problem)
 from solutions.body import Body
 from solutions import joints as joint_solver
 from solutions.contact import Contact
 from solutions.joints import DistanceJoint, JointSolver
 from solutions.response import contact_solver
 from solutions.response.contact_solver import ContactSolver, SolverSettings
+from solutions.response.sweep_solver import SweepContactSolver
+from solutions.scenes import pyramid
+from solutions.solver import contact_sweeps
 from solutions.solver.contact_point import apply_friction_impulse, apply_normal_impulse
+from solutions.world import World, WorldSettings
 
 MODULE = "solver.contact_point"
 BOXES, CHAIN, STEPS, DT, G = 10, 3, 60, 1 / 60, 9.81
@@ -189,3 +195,69 @@ def test_stack_of_ten(student, monkeypatch):
         moving = int(np.argmax(np.abs(trajectory[-1, :, 1])))
         which = (f"box {moving} of the stack" if moving < BOXES else f"box {moving - BOXES} of the chain")
         fail(f"after {STEPS} steps {which} still moves at {sinking:.3g} m/s: the stack and the chain do not rest")
+
+
+
+# The prestep and the sweeps, against the reference and in the engine's world -----------
+@pytest.mark.points(1)
+@pytest.mark.visibility("hidden")
+@pytest.mark.title("Prestep and sweeps: random points, targets and manifolds against the reference")
+def test_prestep_and_sweeps_against_reference(student):
+    for function, cases, problem in (
+            ("prestep_point", prestep_cases(911, 40), lambda got, want: point_problem(got, list(want))),
+            ("contact_target", random_targets(912, 60),
+             lambda got, want: None if isinstance(got, (int, float)) and abs(got - want) <= 1e-9 * (1 + abs(want))
+             else f"the target is {show(got)}, {want!r} expected"),
+            ("sweep_contacts", random_sweep_cases(913, 30),
+             lambda got, want: sweep_problem(got, [[list(v) for v in want[0]], want[1], want[2]]))):
+        answers = student.call_many(SWEEPS, function, [list(args) for args, _ in cases])
+        reference = getattr(contact_sweeps, function)
+        check_cases(list(zip(cases, answers)), lambda ca: problem(ca[1], reference(*ca[0][0])), f"random {function}",
+                    category=lambda ca: ca[0][1])
+
+
+def world_with(student, bodies, scene: str, **settings) -> World:
+    """A plain-step world whose contact solver's prestep and sweeps are the student's."""
+    solver_settings = SolverSettings(block_solver=False, **settings)
+    world = World(bodies, WorldSettings(solver=solver_settings))
+    world.solver = SweepContactSolver(solver_settings, scene_calls(student, scene))
+    return world
+
+
+def tall_box(velocity_y: float = -3.0) -> list[Body]:
+    ground = Body.box(10.0, 1.0, position=(0.0, -0.5), is_static=True, friction=0.6)
+    return [ground, Body.box(0.4, 3.0, mass=1.0, position=(0.0, 1.5), velocity=(0.0, velocity_y), friction=0.6)]
+
+
+@pytest.mark.points(2)
+@pytest.mark.visibility("hidden")
+@pytest.mark.title("World: a tall box landing flat at 3 m/s stops upright, as the reference's sweeps stop it")
+def test_tall_box_landing(student):
+    scene = "the tall box (0.4 x 3 m) landing flat at 3 m/s"
+    world = world_with(student, tall_box(), scene)
+    reference = World(tall_box(), WorldSettings(solver=SolverSettings(block_solver=False)))
+    reference.solver = SweepContactSolver(SolverSettings(block_solver=False))
+    for step in range(30):
+        world.step(DT)
+        reference.step(DT)
+        got = np.array([*world.bodies[1].position, world.bodies[1].angle])
+        want = np.array([*reference.bodies[1].position, reference.bodies[1].angle])
+        if not np.allclose(got, want, atol=1e-6):
+            fail(f"{scene}, step {step + 1}: the box is at (x, y, angle) = {np.round(got, 5).tolist()}, the "
+                 f"reference's sweeps put it at {np.round(want, 5).tolist()}")
+    angle = abs(float(world.bodies[1].angle))
+    assert angle < 0.01, f"{scene}: it turned by {angle:.4f} rad (the reference: 0.004 rad)"
+
+
+@pytest.mark.points(2)
+@pytest.mark.visibility("hidden")
+@pytest.mark.title("World: a pyramid of five rows stands for 1 s with your prestep and sweeps (engine contacts)")
+def test_pyramid_stands(student):
+    scene = "the pyramid of five rows"
+    bodies = pyramid(5)
+    start = np.array([body.position.tolist() for body in bodies])
+    world = world_with(student, bodies, scene)
+    for _ in range(60):
+        world.step(DT)
+    moved = float(np.abs(np.array([body.position.tolist() for body in bodies]) - start).max())
+    assert moved < 0.02, f"{scene}: after 1 s a box has moved {moved:.3f} m from where it rested"

@@ -42,8 +42,9 @@ def at_stake(functions: frozenset[str], reached: dict) -> set[str]:
     return {name for name, found in reached.items() if found is None or found & functions}
 
 
-def measure(slot: int = 0, progress=print) -> dict:
-    """Grade the probe and every bug: ``{"functions": {function: points}, "bugs": [...]}``."""
+def measure(slot: int = 0, progress=print, only: set[str] | None = None) -> dict:
+    """Grade the probe and every bug (those named in ``only``, if given):
+    ``{"functions": {function: points}, "bugs": [...]}``."""
     tests = load_spec()
     points = {t.name: t.points for t in tests}
     started = time.perf_counter()
@@ -57,6 +58,8 @@ def measure(slot: int = 0, progress=print) -> dict:
                      for f in exercise_functions_flat()}
         bugs = []
         for bug in systematic_bugs():
+            if only and bug.name not in only:
+                continue
             rewritten = sample_functions(bug)
             names = at_stake(rewritten, reached)
             sample = build_buggy_sample(bug, Path(folder))
@@ -104,8 +107,10 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m tools.function_losses", description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", default="out/function-losses")
     parser.add_argument("--slot", type=int, default=0, help="sandbox user slot (parallel graders use different ones)")
+    parser.add_argument("--bug", action="append", default=None, help="only this bug (repeatable)")
     args = parser.parse_args(argv)
-    data = measure(args.slot, progress=lambda text: print(text, file=sys.stderr, flush=True))
+    data = measure(args.slot, progress=lambda text: print(text, file=sys.stderr, flush=True),
+                   only=set(args.bug) if args.bug else None)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "function_losses.json").write_text(json.dumps(data, indent=1), encoding="utf-8")

@@ -329,6 +329,7 @@ TARGET_CASES = [
     ((-4.0, 0.5, 0.0, 1 / 60, 1.0, 0.0, 0.005, 3.0), "a fast impact bounces at e times its speed"),
     ((-0.5, 0.5, 0.0, 1 / 60, 1.0, 0.0, 0.005, 3.0), "a slow impact (a resting contact) does not bounce"),
     ((-0.5, 0.5, 0.0, 1 / 60, 0.2, 0.0, 0.005, 3.0), "a lower threshold lets it bounce"),
+    ((-1.0, 0.5, 0.0, 1 / 60, 1.0, 0.0, 0.005, 3.0), "closing exactly at the threshold: no bounce"),
     ((2.0, 0.5, 0.0, 1 / 60, 1.0, 0.0, 0.005, 3.0), "a separating point: no bounce"),
     ((0.0, 0.0, 0.105, 0.01, 1.0, 0.2, 0.005, 3.0), "an overlap is pushed out"),
     ((0.0, 0.0, 0.004, 0.01, 1.0, 0.2, 0.005, 3.0), "an overlap within the slop is left"),

@@ -9,10 +9,11 @@ exercise function announcing itself), whether they call it directly or through a
 exercise function.  The systematic bugs are the example class's samples
 (:data:`~grader.samples.example_class.BUGGY_SAMPLES`) and the shortcuts of
 :mod:`grader.samples.shortcuts`, each graded with the tests reaching the functions it
-rewrites (a test that reaches none of them runs the very code the reference runs).  The
-command prints, per bug, the points at stake (the tests reaching its functions), the points
-it loses and the share, then per exercise function the worst share of the bugs in it and
-the functions no bug covers; it writes ``DIR/function_losses.json``.  Exit status 1 if a bug
+rewrites (a test that reaches none of them runs the very code the reference runs; tests
+through a caller blind to the bug, :data:`grader.samples.shortcuts.BLIND_CALLERS`, are not
+at stake).  The command prints, per bug, the points at stake, the points it loses and the
+share, then per exercise function the worst share of the bugs in it and the functions no
+bug covers; it writes ``DIR/function_losses.json``.  Exit status 1 if a bug
 loses less than half of its points at stake or a failed test keeps more than half of its own.
 """
 from __future__ import annotations
@@ -27,7 +28,7 @@ from pathlib import Path
 from grader.harness.run import load_spec, run_tests
 from grader.samples.example_class import (BUGGY_SAMPLES, BuggySample, build_buggy_sample, exercise_functions_flat,
                                           grade_probe, loses_enough, sample_functions)
-from grader.samples.shortcuts import SHORTCUTS
+from grader.samples.shortcuts import BLIND_CALLERS, SHORTCUTS
 
 
 def systematic_bugs() -> list[BuggySample]:
@@ -37,9 +38,10 @@ def systematic_bugs() -> list[BuggySample]:
                                   for name, replacements in SHORTCUTS.items()]
 
 
-def at_stake(functions: frozenset[str], reached: dict) -> set[str]:
-    """The tests reaching any of ``functions`` (all of them if the probe saw none reached)."""
-    return {name for name, found in reached.items() if found is None or found & functions}
+def at_stake(functions: frozenset[str], reached: dict, blind: frozenset[str] = frozenset()) -> set[str]:
+    """The tests reaching any of ``functions`` (all of them if the probe saw none reached),
+    but none of the ``blind`` callers (:data:`grader.samples.shortcuts.BLIND_CALLERS`)."""
+    return {name for name, found in reached.items() if found is None or (found & functions and not found & blind)}
 
 
 def measure(slot: int = 0, progress=print, only: set[str] | None = None) -> dict:
@@ -61,7 +63,7 @@ def measure(slot: int = 0, progress=print, only: set[str] | None = None) -> dict
             if only and bug.name not in only:
                 continue
             rewritten = sample_functions(bug)
-            names = at_stake(rewritten, reached)
+            names = at_stake(rewritten, reached, frozenset(BLIND_CALLERS.get(bug.name, ())))
             sample = build_buggy_sample(bug, Path(folder))
             graded = run_tests(sample, [t for t in tests if t.name in names], slot=slot)
             lost = {r.test.name: round(r.test.points - r.score, 4) for r in graded if r.score < r.test.points}

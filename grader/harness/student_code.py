@@ -52,6 +52,11 @@ def register(name: str) -> dict:
 
 def encode(value: Any) -> Any:
     """Reference values as plain data for the worker."""
+    kind = type(value)
+    if kind in codec.EXACT_SCALARS:
+        return value
+    if kind is list or kind is tuple:   # builtin scalars kept without a call each
+        return [v if type(v) in codec.EXACT_SCALARS else encode(v) for v in value]
     if isinstance(value, np.ndarray):
         return {codec.ARRAY_TAG: value.tolist()}
     if isinstance(value, (list, tuple)):

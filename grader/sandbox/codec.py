@@ -25,7 +25,9 @@ from the grader or the reference engine (numpy is used only when already importe
 """
 from __future__ import annotations
 
+import json
 import math
+import re
 import sys
 
 SHAPE_TAG = "$shape"
@@ -289,8 +291,10 @@ def encode_value(value, depth: int = 0):
     if value is None:
         return None
     kind = type(value)
-    if kind is str:
+    if kind in EXACT_SCALARS:
         return value
+    if (kind is list or kind is tuple) and all(type(v) in EXACT_SCALARS for v in value):
+        return list(value)   # a list or tuple itself, of builtin scalars: nothing overridden to call
     if isinstance(value, str):
         return str.__str__(value)
     np = _numpy()
@@ -341,6 +345,10 @@ def _key(key) -> str:
 
 
 # Checking what arrives (the parent's side) -------------------------------------------------------
+#: Builtin scalars (exact types, never subclasses) that are plain data as they are.
+EXACT_SCALARS = frozenset({bool, int, float, str, type(None)})
+#: Integers below this size are plain data as they are (a float holds far larger).
+FLOAT_INT_LIMIT = 2 ** 1000
 #: Digits of the longest integer the parent reads from an answer: every number of the
 #: course is a float, and a float holds at most 309 digits before the decimal point.
 MAX_INT_DIGITS = 309
@@ -352,6 +360,19 @@ class TooLargeInt:
 
     def __init__(self, digits: int):
         self.digits = digits
+
+
+#: A run of digits longer than any integer the parent reads (only then does json.loads
+#: need :func:`parse_json_int`, a Python call per integer).
+LONG_DIGITS = re.compile(rb"\d{%d}" % (MAX_INT_DIGITS + 1))
+
+
+def loads_answer(line: bytes):
+    """``json.loads`` of one answer line, integers past ``MAX_INT_DIGITS`` digits read as
+    :class:`TooLargeInt` (the C parser alone when the line holds no such run of digits)."""
+    if LONG_DIGITS.search(line):
+        return json.loads(line, parse_int=parse_json_int)
+    return json.loads(line)
 
 
 def parse_json_int(text: str) -> int | TooLargeInt:
@@ -385,6 +406,8 @@ def plain_data(value, depth: int = 0):
     if kind is str:
         return clean_text(value)
     if kind is list:
+        if _plain_numbers(value):
+            return value[:]
         return [plain_data(v, depth + 1) for v in value]
     if kind is not dict:
         raise NotPlainData(f"a {kind.__name__} is not JSON data")
@@ -394,6 +417,15 @@ def plain_data(value, depth: int = 0):
     if tags:
         _check_tagged(tags[0], value, depth)
     return {clean_text(k): plain_data(v, depth + 1) for k, v in value.items()}
+
+
+def _plain_numbers(values: list) -> bool:
+    """True when every element is a float, or an int a float holds (no call per element)."""
+    for v in values:
+        kind = type(v)
+        if kind is not float and not (kind is int and -FLOAT_INT_LIMIT < v < FLOAT_INT_LIMIT):
+            return False
+    return True
 
 
 def _check_tagged(tag: str, value: dict, depth: int) -> None:

@@ -767,7 +767,7 @@ class Sandbox:
             del self._buffer[:newline + 1]
             scanned = 0
             try:
-                data = json.loads(line, parse_int=codec.parse_json_int)
+                data = codec.loads_answer(line)
             except (ValueError, RecursionError):
                 continue
             if type(data) is not dict:

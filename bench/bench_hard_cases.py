@@ -270,7 +270,7 @@ def table(rows: list[dict]) -> str:
              "momentum left (kg m/s) | error (m) | Pareto |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for r in rows:
-        lines.append(f"| {r['scene']} | {r['engine']} | {r['setting']} | {r['ms_per_frame']:.2f} | "
+        lines.append(f"| {r['scene']} | {r['engine']} | {r['setting']} | {r['ms_per_frame']:.3f} | "
                      f"{r['penetration']:.4f} | {r['drift']:.4f} | {r['energy_gain']:.3g} | {r['momentum']:.3g} | "
                      f"{r['error']:.4f} | {'yes' if r['pareto'] else ''} |")
     notes = [f"error of {name}: {meaning}" for name, meaning in ERROR_MEANING.items()
@@ -319,7 +319,7 @@ def equal_time_goals(rows: list[dict]) -> str:
         for peer in (r for r in rows if r["scene"] == name and r["engine"] in PEERS):
             within = [r for r in compiled if r["ms_per_frame"] <= peer["ms_per_frame"]]
             best = min(within, key=lambda r: r["error"], default=None)
-            shown = (f"{best['error']:.4f} m ({best['setting']}, {best['ms_per_frame']:.2f} ms)" if best else
+            shown = (f"{best['error']:.4f} m ({best['setting']}, {best['ms_per_frame']:.3f} ms)" if best else
                      f"none: its fastest takes {fastest:.2f} ms, {fastest / peer['ms_per_frame']:.0f}x as long")
             accurate = [r for r in compiled if r["error"] < peer["error"]]
             cheapest = min(accurate, key=lambda r: r["ms_per_frame"], default=None)

@@ -128,3 +128,44 @@ def test_a_bullet_flag_set_after_building_is_swept_by_the_readable_stages():
     world.bodies[1].is_bullet = True
     world.step(DT)
     assert world.compiled_soft_step is None and world.bodies[1].position[0] < 1.0
+
+
+def test_a_shape_the_compiled_step_cannot_take_hands_the_world_to_the_readable_stages():
+    readable, compiled = twin_worlds(drop_scene)
+    assert_same_motion(readable, compiled, 3 * DT, DT)
+    for world in (readable, compiled):
+        world.bodies[2].shape = ConvexPolygon([(-0.4, -0.25), (0.4, -0.25), (0.0, 0.3)])
+    assert_same_motion(readable, compiled, 30 * DT, DT)
+    assert compiled.compiled_soft_step is None
+
+
+def test_setters_keep_the_mass_properties_consistent():
+    box = Body.box(2.0, 1.0, mass=3.0, angular_velocity=1.0)
+    inertia = box.inertia
+    box.mass = 6.0          # the shape's inertia for the new mass
+    assert box.inverse_mass == 1 / 6.0 and box.inertia == pytest.approx(2 * inertia, rel=1e-15)
+    box.inertia = 5.0       # set by hand: kept through a change of mass or shape
+    box.mass, box.shape = 1.0, OBB((0.0, 0.0), (3.0, 3.0), 0.0)
+    assert box.inertia == 5.0 and box.inverse_inertia == 0.2 and box.property_row()[0:2].tolist() == [3.0, 3.0]
+    box.fixed_rotation = True
+    assert box.inverse_inertia == 0.0 and math.isinf(box.inertia) and box.angular_velocity == 0.0
+    box.is_static = True
+    assert box.inverse_mass == 0.0 and box.mass == 1.0
+    box.is_static, box.fixed_rotation = False, False
+    assert box.inverse_mass == 1.0 and box.inertia == 5.0
+
+
+@pytest.mark.parametrize("change, error, message", [
+    (lambda body: setattr(body, "mass", 0.0), ValueError, "mass > 0"),
+    (lambda body: setattr(body, "mass", -1.0), ValueError, "mass must be >= 0"),
+    (lambda body: setattr(body, "inertia", 0.0), ValueError, "inertia must be > 0"),
+    (lambda body: setattr(body, "friction", math.nan), ValueError, "friction must be finite"),
+    (lambda body: setattr(body, "restitution", -0.1), ValueError, "restitution must be >= 0"),
+    (lambda body: setattr(body, "shape", "box"), TypeError, "must be a Circle, AABB, OBB or ConvexPolygon"),
+])
+def test_bad_values_set_after_building_raise_and_change_nothing(change, error, message):
+    body = Body.box(1.0, 1.0, mass=2.0, friction=0.5, restitution=0.2)
+    before = body.property_row()
+    with pytest.raises(error, match=message):
+        change(body)
+    assert body.property_row().tolist() == before.tolist()

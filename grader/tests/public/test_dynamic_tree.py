@@ -3,8 +3,10 @@
 
 The functions called are written for you: ``pairs_dynamic_tree`` (insert every box,
 then your ``pairs``), ``moving_pairs`` (insert, then ``move`` every body frame by frame),
-``tree_structure`` (the tree after inserts, removals and moves, as plain data) and
-``sibling_choice`` (the node your ``best_sibling`` picks).  Expected pairs come from
+``tree_structure`` (the tree after inserts, removals and moves, as plain data),
+``sibling_choice`` (the node your ``best_sibling`` picks), and in
+``broadphase/dynamic_tree_reads.py`` ``pairs_reads`` and ``sibling_reads`` (how many node
+boxes your ``pairs`` and ``best_sibling`` read: a search of the tree, not a scan).  Expected pairs come from
 :mod:`grader.oracles.brute_force`; the tree is checked by
 :mod:`grader.oracles.aabb_tree_shape`, which never runs your code or the reference's.
 """
@@ -18,13 +20,15 @@ import pytest
 from grader.harness.compare import pairs as compare_pairs
 from grader.harness.compare import show
 from grader.harness.credit import fail
+from grader.harness.outcome import StudentCallFailed
 from grader.oracles.aabb_tree_shape import (COST_TOLERANCE, grown, median_split_cost, reinsertions, sibling_costs,
                                             structure_problem, well_formed)
 from grader.oracles.brute_force import describe_boxes, overlapping_pairs, pairs_figure
 from grader.oracles.random_cases import clustered_aabbs, random_aabbs
-from grader.oracles.scaling import growth_problem
+from grader.oracles.scaling import growth_problem, sparse_scene
 
 MODULE = "broadphase.dynamic_tree"
+READS_MODULE = "broadphase.dynamic_tree_reads"
 WHO = "your dynamic tree"
 ALGORITHM = ("a dynamic AABB tree (each new leaf's sibling found by descending only into promising subtrees, "
              "each body's partners by entering only the nodes its box meets)")
@@ -32,6 +36,14 @@ MARGIN = 0.1
 #: A tree may cost at most this many times a top-down median-split tree of the same boxes
 #: (measured: the reference 0.88 to 1.1; pairing every leaf with the root 7 to 14, with the leftmost leaf 5.5 to 8).
 MAX_COST_RATIO = 1.5
+#: Boxes of the sparse scene on which the reads of a search are counted.
+SEARCH_SCENE = 2000
+#: Node boxes one body's search in ``pairs`` may read per level of the tree (log2 N) on that
+#: scene (measured: the reference 3.0; a search entering every node about 360).
+MAX_PAIR_READS_PER_LEVEL = 12
+#: Share of the tree's nodes one ``best_sibling`` call may read on average there (measured:
+#: the reference 2 to 3 %, small boxes anywhere in the world; a scan of every node over 100 %).
+MAX_SIBLING_READ_SHARE = 0.25
 
 
 def check_algorithm(student) -> None:
@@ -40,6 +52,56 @@ def check_algorithm(student) -> None:
                              factor=8, small_scene=1000)
     if problem is not None:
         fail(f"{problem} (pairs_dynamic_tree runs your best_sibling, insert_leaf and pairs)")
+
+
+def check_pair_search(student) -> None:
+    """Fail when ``pairs`` finds the pairs of a sparse scene without searching the tree (it
+    reads fewer node boxes than there are bodies) or reads far more than a search entering
+    only the nodes a body's box meets.  Counted, not timed: on a few thousand boxes the
+    library's numpy brute force takes no longer than the tree."""
+    boxes = sparse_scene(SEARCH_SCENE, 3)
+    answer = student.call(READS_MODULE, "pairs_reads", boxes, MARGIN)
+    reads = answer.get("reads") if isinstance(answer, dict) else None
+    if not isinstance(reads, int):
+        fail(f"{WHO}: pairs_reads should return {{'pairs': [...], 'reads': int}}, got {show(answer)[:200]}")
+    count, levels = len(boxes), math.log2(len(boxes))
+    if reads < count:
+        fail(f"{WHO}: on {count} sparse boxes your pairs read {reads} boxes of the tree's nodes, fewer than one per "
+             "body: it finds the pairs without searching the tree. A brute force (or the library's "
+             "pairs_brute_force_numpy) gives the right pairs but is not the exercise: each body's search starts at "
+             "the root and enters only the nodes whose box its tight box meets.")
+    if reads > MAX_PAIR_READS_PER_LEVEL * levels * count:
+        fail(f"{WHO}: on {count} sparse boxes your pairs read {reads} boxes of the tree's nodes, {reads / count:.0f} "
+             f"per body, more than {MAX_PAIR_READS_PER_LEVEL} per level of the tree "
+             f"({MAX_PAIR_READS_PER_LEVEL * levels:.0f}): each body's search should enter only the nodes whose box "
+             "its tight box meets and skip every subtree whose box it misses.")
+
+
+def check_sibling_search(student) -> None:
+    """Fail when ``best_sibling`` reads a large share of the tree's nodes per call on a sparse
+    scene (a scan of every node gives a least-cost node too, in N steps instead of about log N)."""
+    boxes = sparse_scene(SEARCH_SCENE, 4)
+    rng = np.random.default_rng(306)
+    world = 2.0 * math.sqrt(SEARCH_SCENE)
+    centres, halves = rng.uniform(0, world, (20, 2)), rng.uniform(0.05, 1.0, (20, 2))
+    queries = np.hstack([centres - halves, centres + halves])
+    try:
+        reads = student.call(READS_MODULE, "sibling_reads", boxes, queries, MARGIN)
+    except StudentCallFailed as exc:
+        if exc.outcome.status != "timeout":
+            raise
+        fail(f"{WHO}: building a tree of {SEARCH_SCENE} sparse boxes (insert_leaf, best_sibling) and asking "
+             f"best_sibling for {len(queries)} small boxes took too long: best_sibling should visit only the subtrees "
+             "that could still hold a cheaper node, about log N steps, not every node.")
+    if not (isinstance(reads, list) and len(reads) == len(queries) and all(isinstance(r, int) for r in reads)):
+        fail(f"{WHO}: sibling_reads should return one int per query box, got {show(reads)[:200]}")
+    nodes, mean = 2 * SEARCH_SCENE - 1, sum(reads) / len(reads)
+    if mean > MAX_SIBLING_READ_SHARE * nodes:
+        fail(f"{WHO}: in a tree of {SEARCH_SCENE} sparse boxes ({nodes} nodes) your best_sibling read on average "
+             f"{mean:.0f} boxes of the tree's nodes per call for small new boxes, more than "
+             f"{MAX_SIBLING_READ_SHARE:.0%} of the nodes: it should visit only the subtrees that could still hold a "
+             "cheaper node (a subtree costs at least the new box's perimeter plus what its ancestors grow by), "
+             "about log N steps, not all N.")
 
 
 def pairs_text(pairs, limit: int = 10) -> str:
@@ -64,6 +126,7 @@ def check_pair_scenes(student, scenes: list[tuple[np.ndarray, float]], label: st
              f"aabbs={describe_boxes(boxes)}, margin={margin:g}) should return {pairs_text(want)}, got "
              f"{show(answer)}: {problem}", fraction=1 - len(wrong) / len(scenes),
              figure=pairs_figure(boxes, missed, extra, f"pairs_dynamic_tree: {label}"))
+    check_pair_search(student)
 
 
 def moving_scene(rng: np.random.Generator, count: int, frames: int, world: float, step: float) -> np.ndarray:
@@ -144,6 +207,7 @@ def check_siblings(student, cases: list[tuple], label: str) -> None:
                  f"({show(list(box))}) chose the node with box {node['box']} (body {node['body']}), which would add "
                  f"{costs[chosen]:.6g} m of inner perimeter; the node with box {other['box']} (body {other['body']})"
                  f" adds only {costs[best]:.6g} m (its new parent's perimeter plus its ancestors' growth).")
+    check_sibling_search(student)
 
 
 def check_quality(student, scenes: list[tuple[np.ndarray, str]], label: str) -> None:
@@ -173,16 +237,6 @@ SPECIAL_CASES = [
     ("boxes at negative coordinates", [[-1, -1, 0, 0], [-0.5, -0.5, -0.25, -0.25], [0, 0, 1, 1]], 0.1,
      [(0, 1), (0, 2)]),
 ]
-
-
-@pytest.mark.points(3)
-@pytest.mark.partial_credit
-@pytest.mark.title("Dynamic tree: pairs of random and clustered boxes")
-def test_random(student):
-    rng = np.random.default_rng(301)
-    scenes = [(random_aabbs(rng, 80, world=25.0) if k % 3 else clustered_aabbs(rng, 80), (0.1, 0.0, 0.5)[k % 3])
-              for k in range(18)]
-    check_pair_scenes(student, scenes, "random boxes")
 
 
 @pytest.mark.points(2)
@@ -242,3 +296,14 @@ def test_quality(student):
     rng = np.random.default_rng(305)
     boxes = random_aabbs(rng, 400, world=2 * math.sqrt(400))
     check_quality(student, [(boxes, "random order"), (clustered_aabbs(rng, 400), "clustered")], "tree quality")
+
+
+# Last: its growth check times the tree; a wrong tree fails the quicker tests above first.
+@pytest.mark.points(3)
+@pytest.mark.partial_credit
+@pytest.mark.title("Dynamic tree: pairs of random and clustered boxes")
+def test_random(student):
+    rng = np.random.default_rng(301)
+    scenes = [(random_aabbs(rng, 80, world=25.0) if k % 3 else clustered_aabbs(rng, 80), (0.1, 0.0, 0.5)[k % 3])
+              for k in range(18)]
+    check_pair_scenes(student, scenes, "random boxes")

@@ -215,9 +215,10 @@ def test_the_compiled_candidate_pairs_are_the_brute_force_ones(layout):
     bodies, without joined pairs."""
     from solutions.broadphase.aabb_array import aabb_array
     from solutions.broadphase.brute_force import pairs_brute_force
-    from solutions.narrowphase.box_pairs_numba import _faces_of_boxes, matmul_rounding
-    from solutions.response.soft_step_numba import (NO_PAIR, STRIP_GRID_MIN_BODIES, _aabbs, _candidate_pairs,
-                                                     _few_candidate_pairs)
+    from solutions.narrowphase.box_pairs_numba import faces_of_boxes, matmul_rounding
+    from solutions.broadphase.pairs_numba import (STRIP_GRID_MIN_BODIES, aabbs, candidate_pairs,
+                                                  few_candidate_pairs)
+    from solutions.response.soft_step_layout import NO_PAIR
 
     rng = np.random.default_rng({"few": 1, "heap": 4, "pile": 2, "tall_scatter": 3}[layout])
     margin = 0.04
@@ -240,22 +241,22 @@ def test_the_compiled_candidate_pairs_are_the_brute_force_ones(layout):
         jointed[:len(joined)] = joined
         bodies = [Body.box(2 * hx, 2 * hy, mass=1.0, position=p, angle=a)
                   for (hx, hy), p, a in zip(half, position, angle)]
-        aabbs = aabb_array([b.world_shape() for b in bodies]) + 0.5 * margin * np.array([-1.0, -1.0, 1.0, 1.0])
-        want = [(i, j) for i, j in sorted(pairs_brute_force(aabbs))
+        boxes = aabb_array([b.world_shape() for b in bodies]) + 0.5 * margin * np.array([-1.0, -1.0, 1.0, 1.0])
+        want = [(i, j) for i, j in sorted(pairs_brute_force(boxes))
                 if (dynamic[i] or dynamic[j]) and i * n + j not in joined]
         faces = np.empty((n, 2, 4, 2))
-        _faces_of_boxes(position, half, angle, matmul_rounding()[0], faces)
+        faces_of_boxes(position, half, angle, matmul_rounding()[0], faces)
         aabb = np.empty((n, 4))
-        _aabbs(position, half, faces, margin, False, aabb)
-        keys, first, second = _candidate_pairs(aabb, dynamic, jointed)
+        aabbs(position, half, faces, margin, False, aabb)
+        keys, first, second = candidate_pairs(aabb, dynamic, jointed)
         assert list(zip(first.tolist(), second.tolist())) == want, f"trial {trial}"
         assert keys.tolist() == [i * n + j for i, j in want]
         if n < STRIP_GRID_MIN_BODIES:       # the step's own sweep for a few bodies, into buffers
-            found = len(pairs_brute_force(aabbs))
+            found = len(pairs_brute_force(boxes))
             for capacity, fits in ((found + n, True), (found - 1, False)):     # (room for a box's partners)
                 out = np.full((3, max(capacity, 0)), -7, dtype=np.int64)
                 work = np.empty(2 * n + 3 * max(capacity, 0) + 1, dtype=np.int64)
-                m = _few_candidate_pairs(aabb, dynamic, jointed, work, np.empty((n, 4)), out[0], out[1], out[2])
+                m = few_candidate_pairs(aabb, dynamic, jointed, work, np.empty((n, 4)), out[0], out[1], out[2])
                 if fits:
                     assert m == len(want) and out[:, :m].tolist() == [keys.tolist(), first.tolist(), second.tolist()]
                 else:

@@ -108,7 +108,7 @@ def pairs_grid_numba(aabbs, cell_size: float | None = None, margin: float = 0.0,
     if margin > 0.0 and math.isfinite(margin):
         boxes = boxes + 0.5 * margin * np.array([-1.0, -1.0, 1.0, 1.0])
     # The checks of the numpy grid, in its order (then the margin's).
-    valid, twice_median_extent, lowest_y, highest_y = _check_and_measure(boxes)
+    valid, twice_median_extent, lowest_y, highest_y = check_and_measure(boxes)
     if not valid:
         validate_aabbs(aabbs)          # raises the numpy grid's error for a bad box
     max_strips_per_body = int(max_strips_per_body)
@@ -134,11 +134,11 @@ def pairs_grid_numba(aabbs, cell_size: float | None = None, margin: float = 0.0,
         raise ValueError(f"cell_size {cell_size} is too small for y coordinates up to "
                          f"{np.abs(boxes[:, [MIN_Y, MAX_Y]]).max():.3g} m: strip indices would not be exact integers")
 
-    lowest, highest, entry_count = _strips(boxes, cell_size, max_strips_per_body)
+    lowest, highest, entry_count = body_strips(boxes, cell_size, max_strips_per_body)
     if entry_count and top - bottom >= DENSE_STRIPS_PER_ENTRY * entry_count + 1024:
         lowest, highest = _numbered_strips(lowest, highest, highest - lowest < max_strips_per_body)
     body_of_rank = np.argsort(boxes[:, MIN_X])
-    return _grid_pairs(boxes, body_of_rank, lowest, highest, max_strips_per_body)
+    return grid_pairs(boxes, body_of_rank, lowest, highest, max_strips_per_body)
 
 
 def _box_array(aabbs) -> np.ndarray:
@@ -166,7 +166,7 @@ def _numbered_strips(lowest: np.ndarray, highest: np.ndarray, small: np.ndarray)
 
 
 @njit(cache=True)
-def _check_and_measure(boxes):
+def check_and_measure(boxes):
     """``(valid, 2 * median extent, lowest y, highest y)``: whether every box is finite
     with min <= max; twice the median of ``max(width, height)``, the float
     ``suggest_cell_size`` computes (the same middle values, averaged as numpy's
@@ -259,7 +259,7 @@ def _select(values, k):
 
 
 @njit(cache=True)
-def _strips(boxes, cell_size, max_strips_per_body):
+def body_strips(boxes, cell_size, max_strips_per_body):
     """Lowest and highest strip of every body (floor, not int, so that negative y
     works, as the numpy grid), and how many entries the bodies that go into strips make."""
     n = boxes.shape[0]
@@ -274,7 +274,7 @@ def _strips(boxes, cell_size, max_strips_per_body):
 
 
 @njit(cache=True)
-def _grown(buffer, needed):
+def grown_buffer(buffer, needed):
     """``buffer`` copied into one at least ``needed`` long (doubling)."""
     size = len(buffer)
     while size < needed:
@@ -286,7 +286,7 @@ def _grown(buffer, needed):
 
 
 @njit(cache=True)
-def _grid_pairs(boxes, body_of_rank, lowest, highest, max_strips_per_body):
+def grid_pairs(boxes, body_of_rank, lowest, highest, max_strips_per_body):
     """Steps 1 to 5: the sorted (M, 2) int64 pairs.  Body indices are int32 inside
     (the caller sends more than 2**31 - 1 bodies to the numpy grid)."""
     n = boxes.shape[0]
@@ -342,7 +342,7 @@ def _grid_pairs(boxes, body_of_rank, lowest, highest, max_strips_per_body):
             if group == strips:
                 break
             needed = used + group_start[group + 1] - entry
-            first, second = _grown(first, needed), _grown(second, needed)
+            first, second = grown_buffer(first, needed), grown_buffer(second, needed)
 
     # Step 4: oversized bodies against every body; a pair of two oversized bodies is
     # kept from the smaller index only.
@@ -355,10 +355,10 @@ def _grid_pairs(boxes, body_of_rank, lowest, highest, max_strips_per_body):
             if (boxes[i, MAX_X] >= boxes[j, MIN_X] and boxes[j, MAX_X] >= boxes[i, MIN_X]
                     and boxes[i, MAX_Y] >= boxes[j, MIN_Y] and boxes[j, MAX_Y] >= boxes[i, MIN_Y]):
                 if used == len(first):
-                    first, second = _grown(first, used + 1), _grown(second, used + 1)
+                    first, second = grown_buffer(first, used + 1), grown_buffer(second, used + 1)
                 first[used], second[used] = min(i, j), max(i, j)
                 used += 1
-    return _sorted_pairs(first[:used], second[:used], n)
+    return sorted_pairs(first[:used], second[:used], n)
 
 
 @njit(cache=True)
@@ -393,20 +393,20 @@ def _sweep(entry_min_x, entry_max_x, entry_y, entry_at_home, entry_body, group_s
 
 
 @njit(cache=True)
-def _sorted_pairs(first, second, n):
+def sorted_pairs(first, second, n):
     """Step 5: the pairs as an (M, 2) array sorted by (first, second): a stable
     counting sort by ``second``, then one by ``first``."""
     m = len(first)
     if m > MAX_BODIES:
         raise MemoryError("more than 2**31 - 1 pairs (an output of over 32 GB)")
     pairs = np.empty((m, 2), dtype=np.int64)
-    _counting_sort_pairs(first, second, m, np.empty(m, dtype=np.int32), np.empty(n + 1, dtype=np.int64),
+    counting_sort_pairs(first, second, m, np.empty(m, dtype=np.int32), np.empty(n + 1, dtype=np.int64),
                          pairs[:, 0], pairs[:, 1])
     return pairs
 
 
 @njit(cache=True)
-def _counting_sort_pairs(first, second, m, by_second, start, sorted_first, sorted_second):
+def counting_sort_pairs(first, second, m, by_second, start, sorted_first, sorted_second):
     """The first ``m`` pairs ``(first, second)`` of bodies ``0 .. n - 1`` sorted by
     (first, second) into ``sorted_first`` and ``sorted_second``: a stable counting sort by
     ``second``, then one by ``first``.  ``by_second`` (m) and ``start`` (n + 1) are work space."""

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 
-def _as_array(name: str, value, shape: tuple, count: int | None) -> np.ndarray:
+def checked_array(name: str, value, shape: tuple, count: int | None) -> np.ndarray:
     array = np.asarray(value, dtype=float)
     if array.ndim != len(shape) or array.shape[1:] != shape[1:] or (count is not None and len(array) != count):
         wanted = ("n",) + shape[1:]
@@ -57,13 +57,13 @@ def obbs_overlap_batch(centers_a, half_a, angles_a, centers_b, half_b, angles_b)
     ...                    [[2.3, 0.0], [-2.0, 0.0]], [[1.0, 1.0], [1.0, 1.0]], [0.785398, 0.0]).tolist()
     [True, False]
     """
-    centers_a = _as_array("centers_a", centers_a, (0, 2), None)
+    centers_a = checked_array("centers_a", centers_a, (0, 2), None)
     n = len(centers_a)
-    half_a = _as_array("half_a", half_a, (0, 2), n)
-    angles_a = _as_array("angles_a", angles_a, (0,), n)
-    centers_b = _as_array("centers_b", centers_b, (0, 2), n)
-    half_b = _as_array("half_b", half_b, (0, 2), n)
-    angles_b = _as_array("angles_b", angles_b, (0,), n)
+    half_a = checked_array("half_a", half_a, (0, 2), n)
+    angles_a = checked_array("angles_a", angles_a, (0,), n)
+    centers_b = checked_array("centers_b", centers_b, (0, 2), n)
+    half_b = checked_array("half_b", half_b, (0, 2), n)
+    angles_b = checked_array("angles_b", angles_b, (0,), n)
     if np.any(half_a < 0) or np.any(half_b < 0):
         raise ValueError("half-extents must be >= 0")
 

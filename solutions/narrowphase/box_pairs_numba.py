@@ -44,7 +44,7 @@ from numba import njit, types
 from numba.extending import intrinsic
 
 from ..shapes import EPS, ROUNDOFF_SIZE_RTOL, ROUNDOFF_ULPS
-from .batch_sat import _as_array
+from .batch_sat import checked_array
 from .polygon_polygon import KEEP_POINT_TOL, REFERENCE_FACE_ABSOLUTE_TOL, REFERENCE_FACE_RELATIVE_TOL
 from .speculative import SPECULATIVE_MARGIN
 from .speculative_batch import BoxManifolds
@@ -63,7 +63,7 @@ MANIFOLD_INTS = 7
 #: and the two points (m) as x0, y0, x1, y1 (NaN where no point).
 MANIFOLD_NX, MANIFOLD_NY, MANIFOLD_SEPARATION, MANIFOLD_POINT = 0, 1, 2, 4
 MANIFOLD_FLOATS = 8
-#: Size of the clipping work space of :func:`_indexed_manifolds`: floats, then integers.
+#: Size of the clipping work space of :func:`indexed_manifolds`: floats, then integers.
 CLIPPING_FLOATS, CLIPPING_INTS = 10, 2
 
 #: How a two-term dot product ``a0 * b0 + a1 * b1`` is rounded (see the module docstring).
@@ -165,7 +165,7 @@ def _box_faces(cx, cy, hx, hy, cos, sin, corner_rounding, vertices, normals):
 
 
 @njit(cache=True)
-def _faces_of_boxes(centre, half, angle, corner_rounding, faces):
+def faces_of_boxes(centre, half, angle, corner_rounding, faces):
     """Each box's corners and outward normals into ``faces`` (n, 2, 4, 2): ``faces[i, 0]``
     the corners, ``faces[i, 1]`` the normals, as :func:`_box_faces` makes them."""
     for i in range(angle.shape[0]):
@@ -244,20 +244,20 @@ def _manifolds_kernel(centre_a, half_a, angle_a, centre_b, half_b, angle_b, marg
     """The manifolds of pairs given box by box: pair ``k``'s boxes are faces ``2k`` and ``2k + 1``."""
     m = centre_a.shape[0]
     faces = np.empty((2 * m, 2, 4, 2))
-    _faces_of_boxes(centre_a, half_a, angle_a, corner_rounding, faces[0::2])
-    _faces_of_boxes(centre_b, half_b, angle_b, corner_rounding, faces[1::2])
+    faces_of_boxes(centre_a, half_a, angle_a, corner_rounding, faces[0::2])
+    faces_of_boxes(centre_b, half_b, angle_b, corner_rounding, faces[1::2])
     index = np.arange(2 * m)
     ints, floats = np.empty((MANIFOLD_INTS, m), dtype=np.int64), np.empty((MANIFOLD_FLOATS, m))
-    _indexed_manifolds(faces, index[0::2], index[1::2], margin, incident_rounding, ints, floats,
+    indexed_manifolds(faces, index[0::2], index[1::2], margin, incident_rounding, ints, floats,
                        np.empty(CLIPPING_FLOATS), np.empty(CLIPPING_INTS, dtype=np.int64))
     return ints, floats
 
 
 @njit(cache=True)
-def _indexed_manifolds(faces, box_a, box_b, margin, incident_rounding, ints, floats, clipping_floats,
+def indexed_manifolds(faces, box_a, box_b, margin, incident_rounding, ints, floats, clipping_floats,
                        clipping_ints):
     """The manifolds of the pairs ``faces[box_a[k]]`` against ``faces[box_b[k]]``
-    (:func:`_faces_of_boxes`) into ``ints`` and ``floats`` (``MANIFOLD_*`` rows, one
+    (:func:`faces_of_boxes`) into ``ints`` and ``floats`` (``MANIFOLD_*`` rows, one
     column per pair); ``clipping_*`` are work space (``CLIPPING_*`` values)."""
     m = box_a.shape[0]
     found, count, reference_is_b = ints[MANIFOLD_FOUND], ints[MANIFOLD_COUNT], ints[MANIFOLD_REFERENCE_IS_B]
@@ -377,13 +377,13 @@ def speculative_box_manifolds_numba(centre_a, half_a, angle_a, centre_b, half_b,
     """
     if not margin >= 0.0:
         raise ValueError(f"margin must be >= 0 m, got {margin}")
-    centre_a = _as_array("centre_a", centre_a, (0, 2), None)
+    centre_a = checked_array("centre_a", centre_a, (0, 2), None)
     m = len(centre_a)
-    half_a = _as_array("half_a", half_a, (0, 2), m)
-    angle_a = _as_array("angle_a", angle_a, (0,), m)
-    centre_b = _as_array("centre_b", centre_b, (0, 2), m)
-    half_b = _as_array("half_b", half_b, (0, 2), m)
-    angle_b = _as_array("angle_b", angle_b, (0,), m)
+    half_a = checked_array("half_a", half_a, (0, 2), m)
+    angle_a = checked_array("angle_a", angle_a, (0,), m)
+    centre_b = checked_array("centre_b", centre_b, (0, 2), m)
+    half_b = checked_array("half_b", half_b, (0, 2), m)
+    angle_b = checked_array("angle_b", angle_b, (0,), m)
     if np.any(half_a < 0) or np.any(half_b < 0):
         raise ValueError("half-extents must be >= 0")
     corner_rounding, incident_rounding, _ = matmul_rounding()

@@ -47,7 +47,7 @@ import numpy as np
 
 from ..contact import Contact
 from ..shapes import AABB, OBB
-from .batch_sat import _as_array
+from .batch_sat import checked_array
 from .polygon_polygon import KEEP_POINT_TOL, REFERENCE_FACE_ABSOLUTE_TOL, REFERENCE_FACE_RELATIVE_TOL, tolerance_scale
 from .speculative import SPECULATIVE_MARGIN
 
@@ -203,13 +203,13 @@ def speculative_box_manifolds(centre_a, half_a, angle_a, centre_b, half_b, angle
     """
     if not margin >= 0.0:
         raise ValueError(f"margin must be >= 0 m, got {margin}")
-    centre_a = _as_array("centre_a", centre_a, (0, 2), None)
+    centre_a = checked_array("centre_a", centre_a, (0, 2), None)
     m = len(centre_a)
-    half_a = _as_array("half_a", half_a, (0, 2), m)
-    angle_a = _as_array("angle_a", angle_a, (0,), m)
-    centre_b = _as_array("centre_b", centre_b, (0, 2), m)
-    half_b = _as_array("half_b", half_b, (0, 2), m)
-    angle_b = _as_array("angle_b", angle_b, (0,), m)
+    half_a = checked_array("half_a", half_a, (0, 2), m)
+    angle_a = checked_array("angle_a", angle_a, (0,), m)
+    centre_b = checked_array("centre_b", centre_b, (0, 2), m)
+    half_b = checked_array("half_b", half_b, (0, 2), m)
+    angle_b = checked_array("angle_b", angle_b, (0,), m)
     if np.any(half_a < 0) or np.any(half_b < 0):
         raise ValueError("half-extents must be >= 0")
     rows = np.arange(m)

@@ -20,7 +20,7 @@ operations, as one compiled function over the world's
    by feature id or else by the nearest point, the sweep order and the 2x2 blocks);
 4. the sub-steps of :class:`~solutions.response.soft_step.SoftStepSolver` (gravity,
    warm start, soft solve, positions, relax), each pass the compiled solver kernel
-   (:func:`solutions.solver.kernel_numba._sweeps`, copied in);
+   (:func:`solutions.solver.kernel_numba.sweep_groups`, copied in);
 5. restitution, and the impulses remembered for the next step.
 
 It covers a world whose every body is a box (``Body.box``: an OBB centred on the body)
@@ -37,7 +37,7 @@ grid's; a few bodies are swept without allocating).  Everything else lives in ar
 :class:`CompiledSoftStep` keeps between steps, made for a number of candidate pairs that
 grows when a step finds more (the step then returns, having changed nothing, and runs
 again): two buffers of contact points, the last step's (its warm start) and this
-step's, and a work space of integers and of floats (:func:`_work_sizes`) from which the
+step's, and a work space of integers and of floats (:func:`~solutions.response.soft_step_layout.work_sizes`) from which the
 step takes each of its blocks in turn.  After the strip grid's candidate pairs, or from
 the start for a few bodies, the step runs in a function compiled without reference
 counts (:func:`_step_on_pairs`), where the many views it makes of its blocks cost nothing.
@@ -57,15 +57,24 @@ from numba import njit
 
 from ..body_state import EXTENT_X, EXTENT_Y, FRICTION, INVERSE_INERTIA, INVERSE_MASS, RESTITUTION
 from ..contact import Contact
-from ..broadphase.grid_numba import (DENSE_STRIPS_PER_ENTRY, _check_and_measure, _counting_sort_pairs, _grid_pairs,
-                                      _grown, _strips)
-from ..broadphase.grid_numba import _sorted_pairs as _sorted_grid_pairs
-from ..broadphase.sorted_grid_numpy import DEFAULT_MAX_STRIPS_PER_BODY, MAX_STRIP_INDEX
 from ..narrowphase.box_pairs_numba import (CLIPPING_FLOATS, CLIPPING_INTS, MANIFOLD_COUNT, MANIFOLD_FLOATS,
                                            MANIFOLD_FOUND, MANIFOLD_INCIDENT_FACE, MANIFOLD_INTS, MANIFOLD_NX,
                                            MANIFOLD_NY, MANIFOLD_POINT, MANIFOLD_REFERENCE_FACE,
                                            MANIFOLD_REFERENCE_IS_B, MANIFOLD_SEPARATION, MANIFOLD_VERTEX,
-                                           _faces_of_boxes, _indexed_manifolds, matmul_rounding)
+                                           indexed_manifolds, matmul_rounding)
+from ..broadphase.pairs_numba import (STRIP_GRID_MIN_BODIES, candidate_pairs, faces_and_aabbs, few_candidate_pairs)
+from .soft_step_layout import (FIGURE_BLOCK_MANIFOLDS, FIGURE_CANDIDATE_PAIRS, FIGURE_MANIFOLDS, FIGURE_MEMORY,
+                               FIGURE_POINTS, FIGURE_WARM_STARTED, HEADER_CAPACITY, HEADER_COUNT, HEADER_JOINTS,
+                               JOINT_A, JOINT_ANCHOR_AX, JOINT_ANCHOR_AY, JOINT_ANCHOR_BX, JOINT_ANCHOR_BY, JOINT_B,
+                               JOINT_DAMPING, JOINT_FREQUENCY, JOINT_LENGTH, JOINT_PAIRS, NO_PAIR,
+                               PARAMETER_DT_RATIO, PARAMETER_GRAVITY_X, PARAMETER_GRAVITY_Y, PARAMETER_H,
+                               PARAMETER_JOINT_SOFTNESS, PARAMETER_MARGIN, PARAMETER_MATCH_DISTANCE,
+                               PARAMETER_MAX_PUSH, PARAMETER_RESTITUTION_THRESHOLD, PARAMETER_SOFT, PARAMETER_STIFF,
+                               POINT_A, POINT_B, POINT_FEATURE, POINT_NORMAL_IMPULSE, POINT_NX, POINT_NY, POINT_PAIR,
+                               POINT_SEPARATION, POINT_TANGENT_IMPULSE, POINT_X, POINT_Y, SWITCH_BLOCK_SOLVER,
+                               SWITCH_CIRCLES, SWITCH_COLOURS, SWITCH_CORNER_ROUNDING, SWITCH_FRICTION,
+                               SWITCH_INCIDENT_ROUNDING, SWITCH_ITERATIONS, SWITCH_RELAX, SWITCH_ROTATION,
+                               SWITCH_SUBSTEPS, SWITCH_WARM_START, layout, sections, take)
 from ..narrowphase.circle_circle import COINCIDENT_CENTRES_ATOL, COINCIDENT_CENTRES_NORMAL
 from ..narrowphase.speculative import SPECULATIVE_MARGIN
 from ..joints import DistanceJoint
@@ -74,316 +83,41 @@ from ..solver.constraint_rows import MAX_CONDITION_NUMBER
 from ..solver.kernel_numba import (GROUP_A, GROUP_B, GROUP_BLOCK, GROUP_COUNT, GROUP_FIRST, GROUP_IIA, GROUP_IIB,
                                    GROUP_IMA, GROUP_IMB, GROUP_NX, GROUP_NY, ROW_LOWER, ROW_MASS_NORMAL, ROW_RN_A,
                                    ROW_RN_B, SOLUTION_IMPULSE_SCALE, SOLUTION_MASS_SCALE, SOLUTION_NORMAL,
-                                   SOLUTION_TANGENT, SOLUTION_TARGET, _sweeps)
+                                   SOLUTION_TANGENT, SOLUTION_TARGET, sweep_groups)
 from .soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, soft_coefficients
 from .solver_settings import SolverStats
 from ..compiled_cache import forget_stale_machine_code
 from ..no_alias_compiler import NoAliasCompiler
 
 
-#: The candidate pairs come from the strip grid of
-#: :mod:`~solutions.broadphase.grid_numba` from this many bodies on (a sort-and-sweep
-#: on x below, and for bodies scattered over heights far larger than they are):
-#: measured, the sweep is faster up to about that many bodies and the grid beyond (on
-#: a 20-base pyramid, the sweep meets about ten times as many pairs as it keeps).
-STRIP_GRID_MIN_BODIES = 64
-#: Up to this many values, the candidate pairs' sorts are insertion sorts.
-INSERTION_SORT_MAX = 64
-#: Columns of the contact points' integer array: pair key ``i * n + j``, feature id, bodies.
-POINT_PAIR, POINT_FEATURE, POINT_A, POINT_B = range(4)
-#: Columns of their float array: point (m), normal, signed separation at the start of the
-#: step (m), accumulated normal and tangent impulses (N s).
-POINT_X, POINT_Y, POINT_NX, POINT_NY, POINT_SEPARATION, POINT_NORMAL_IMPULSE, POINT_TANGENT_IMPULSE = range(7)
-#: The step's figures, an integer array it reads and writes: which of the two point
-#: buffers holds the last step's points (0 or 1) and how many; then what this step
-#: counted: candidate pairs, manifolds, warm-started points, manifolds solved as blocks.
-(FIGURE_MEMORY, FIGURE_POINTS, FIGURE_CANDIDATE_PAIRS, FIGURE_MANIFOLDS, FIGURE_WARM_STARTED,
- FIGURE_BLOCK_MANIFOLDS) = range(6)
-FIGURE_COUNT = 6
-#: Rows of the joints' integer array: bodies a and b of each joint, then the joined pairs'
-#: sorted keys ``i * n + j`` (as many as distinct pairs), padded with ``NO_PAIR``.
-JOINT_A, JOINT_B, JOINT_PAIRS = range(3)
-NO_PAIR = np.iinfo(np.int64).max
-#: Columns of the joints' constant float array (one row per joint): anchors in the
-#: bodies' frames (m), rest length (m), spring frequency (Hz, 0: a rod), damping ratio.
-(JOINT_ANCHOR_AX, JOINT_ANCHOR_AY, JOINT_ANCHOR_BX, JOINT_ANCHOR_BY, JOINT_LENGTH, JOINT_FREQUENCY,
- JOINT_DAMPING) = range(7)
-#: Positions in the step's float parameters: the ratio of this step's h to the last
-#: one's, h (s), gravity (m/s^2), the largest push (m/s), the restitution threshold
-#: (m/s), the warm start's match distance (m), the speculative margin (m), then the
-#: (bias rate, mass scale, impulse scale) of the soft contacts, of the contacts with a
-#: static body and of the joints.  (One section of ``floats``: see
-#: :data:`HEADER_COUNT`.)
-(PARAMETER_DT_RATIO, PARAMETER_H, PARAMETER_GRAVITY_X, PARAMETER_GRAVITY_Y, PARAMETER_MAX_PUSH,
- PARAMETER_RESTITUTION_THRESHOLD, PARAMETER_MATCH_DISTANCE, PARAMETER_MARGIN) = range(8)
-PARAMETER_SOFT, PARAMETER_STIFF, PARAMETER_JOINT_SOFTNESS = 8, 11, 14
-PARAMETER_COUNT = 17
-#: Positions in the step's integer switches: sub-steps, sweeps per pass, relax,
-#: friction, warm starting, block solver, colour order, the two matmul roundings
-#: (:func:`~solutions.narrowphase.box_pairs_numba.matmul_rounding`), discs (else
-#: boxes), rotation.
-(SWITCH_SUBSTEPS, SWITCH_ITERATIONS, SWITCH_RELAX, SWITCH_FRICTION, SWITCH_WARM_START, SWITCH_BLOCK_SOLVER,
- SWITCH_COLOURS, SWITCH_CORNER_ROUNDING, SWITCH_INCIDENT_ROUNDING, SWITCH_CIRCLES, SWITCH_ROTATION) = range(11)
-SWITCH_COUNT = 11
-#: The step takes two arrays besides the bodies' state (each array argument costs a
-#: call about 50 ns): ``ints`` and ``floats``, each a row of sections (:func:`_layout`).
-#: ``ints`` starts with a header: the number of joints, and the number of candidate
-#: pairs the buffers are made for.
-HEADER_JOINTS, HEADER_CAPACITY = range(2)
-HEADER_COUNT = 2
 
 
-@njit(cache=True)
-def _layout(bodies, joints, capacity):
-    """Where each section of the step's ``ints`` and ``floats`` starts, and their sizes,
-    for ``bodies`` bodies, ``joints`` joints and buffers for ``capacity`` candidate pairs:
-
-    - ``ints``: the header, ``switches`` (``SWITCH_*``), ``figures`` (``FIGURE_*``), the
-      joints' integers (3, joints), the two point buffers (2, 2 * capacity, 4), the work space;
-    - ``floats``: ``parameters`` (``PARAMETER_*``), the joints' constants (joints, 7),
-      their impulses (joints), the two point buffers (2, 2 * capacity, 7), the work space.
-
-    (The bodies' masses, materials and extents are not here: the step reads them from
-    the world's :class:`~solutions.body_state.BodyState` every step.)
-    """
-    work_ints, work_floats = _work_sizes(bodies, joints, capacity)
-    switches = HEADER_COUNT
-    figures = switches + SWITCH_COUNT
-    joint_ints = figures + FIGURE_COUNT
-    memory_ints = joint_ints + 3 * joints
-    work = memory_ints + 2 * 2 * capacity * 4
-    joint_floats = PARAMETER_COUNT
-    impulses = joint_floats + 7 * joints
-    memory_floats = impulses + joints
-    work_space = memory_floats + 2 * 2 * capacity * 7
-    return (switches, figures, joint_ints, memory_ints, work, work + work_ints,
-            joint_floats, impulses, memory_floats, work_space, work_space + work_floats)
 
 
-@njit(cache=True)
-def _work_sizes(bodies, joints, pairs):
-    """Integers and floats of the step's work space (``work_ints``, ``work_floats``) for
-    ``bodies`` bodies, ``joints`` joints and up to ``pairs`` candidate pairs (up to
-    ``pairs`` manifolds and ``2 * pairs`` points; the last step's points are up to
-    ``2 * pairs`` too).  Each block is counted where :func:`_step_on_pairs` takes it."""
-    ints = (2 * bodies + 6 * pairs + 1                           # a few bodies' candidate pairs
-            + 2 * pairs + MANIFOLD_INTS * pairs + CLIPPING_INTS  # features, manifolds, clipping
-            + 5 * pairs + 6 * 2 * pairs + 2 * bodies             # groups and points in pair order, body flags
-            + 3 * pairs + bodies + 2                             # the sweep order
-            + 5 * pairs + bodies + 6 * joints                    # the kernel's groups, static bodies, joints
-            + 2 * pairs + 2 * pairs)                             # the warm start's matching
-    floats = (30 * bodies + MANIFOLD_FLOATS * pairs + CLIPPING_FLOATS    # faces, AABBs, sweep, bodies; manifolds
-              + 27 * 2 * pairs + 9 * pairs + (8 + 6 + 5) * 2 * pairs     # points, groups, rows
-              + 25 * joints)
-    return ints, floats
 
 
-@njit(cache=True, inline="always")
-def _take(work, at, size):
-    """``size`` values of the work space ``work`` from ``at``, and where the next block starts."""
-    return work[at:at + size], at + size
 
 
-@njit(cache=True, inline="always")     # (returns views: inlined, also into _step_on_pairs)
-def _faces_and_aabbs(position, angle, half, margin, circles, corner_rounding, work_floats):
-    """The boxes' corners and normals (:func:`_faces_of_boxes`; not for discs) and every
-    body's widened AABB (:func:`_aabbs`), made at the start of the work space
-    ``work_floats`` (16 n and 4 n values), as views (n, 2, 4, 2) and (n, 4)."""
-    n = position.shape[0]
-    faces = work_floats[:16 * n].reshape((n, 2, 4, 2))
-    aabb = work_floats[16 * n:20 * n].reshape((n, 4))
-    if not circles:
-        _faces_of_boxes(position, half, angle, corner_rounding, faces)
-    _aabbs(position, half, faces, margin, circles, aabb)
-    return faces, aabb
 
 
-@njit(cache=True, _nrt=False)     # (without reference counts: see _step_on_pairs)
-def _aabbs(position, half, faces, margin, circles, aabb):
-    """Each body's AABB widened by ``margin / 2`` into ``aabb`` (n, 4: min x, min y, max x,
-    max y): boxes of corners ``faces[:, 0]``, or discs of radius ``half[:, 0]``."""
-    grow = 0.5 * margin
-    for i in range(position.shape[0]):
-        if circles:
-            r = half[i, 0]
-            aabb[i, 0], aabb[i, 1] = (position[i, 0] - r) + (-grow), (position[i, 1] - r) + (-grow)
-            aabb[i, 2], aabb[i, 3] = (position[i, 0] + r) + grow, (position[i, 1] + r) + grow
-            continue
-        for c in range(2):      # corners 0..3 of faces[i, 0]
-            aabb[i, c] = min(faces[i, 0, 0, c], faces[i, 0, 1, c], faces[i, 0, 2, c], faces[i, 0, 3, c]) + (-grow)
-            aabb[i, 2 + c] = max(faces[i, 0, 0, c], faces[i, 0, 1, c], faces[i, 0, 2, c], faces[i, 0, 3, c]) + grow
 
 
-@njit(cache=True, _nrt=False)     # (without reference counts: see _step_on_pairs)
-def _few_candidate_pairs(aabb, dynamic, jointed, work, swept, keys, key_i, key_j):
-    """:func:`_candidate_pairs` for fewer than ``STRIP_GRID_MIN_BODIES`` bodies, which it
-    sweeps as :func:`_swept_pairs` does, without allocating: the pairs into ``keys``,
-    ``key_i`` and ``key_j`` (of the same length, the capacity ``C``).  ``work`` holds
-    ``2 * n + 3 * C + 1`` integers and ``swept`` is (n, 4).  Returns the number of pairs,
-    or -1 if the buffers ran short: the sweep wants room for the pairs found so far and
-    every possible partner of the next box (``C >= pairs + n`` is always enough)."""
-    n, capacity = aabb.shape[0], keys.shape[0]
-    rank, first, second = work[:n], work[n:n + capacity], work[n + capacity:n + 2 * capacity]
-    by_second, start = work[n + 2 * capacity:n + 3 * capacity], work[n + 3 * capacity:2 * n + 3 * capacity + 1]
-    axis = _sweep_axis(aabb)
-    _insertion_rank(aabb, axis, rank)
-    _swept_boxes(aabb, rank, axis, swept)
-    found, r = _sweep(swept, rank, first, second, 0, 0)
-    if r < n:
-        return -1
-    if found <= INSERTION_SORT_MAX:
-        _insertion_sort_pairs(first, second, found, key_i, key_j)
-    else:
-        _counting_sort_pairs(first, second, found, by_second, start, key_i, key_j)
-    return _kept_pairs(key_i, key_j, found, dynamic, jointed, keys, key_i, key_j)
 
 
-@njit(cache=True)
-def _kept_pairs(first, second, found, dynamic, jointed, keys, key_i, key_j):
-    """Of the first ``found`` sorted pairs, those not both static (``dynamic``: per body,
-    True or a nonzero inverse mass for a dynamic one) and not joined (``jointed``:
-    sorted keys, padded with ``NO_PAIR``) into ``keys`` (``i * n + j``),
-    ``key_i`` and ``key_j`` (which may be ``first`` and ``second``: written at or before
-    each pair read); returns how many."""
-    n = dynamic.shape[0]
-    kept = 0
-    joined = 0          # both the pairs and the joined keys are sorted: walk them together
-    for k in range(found):
-        i, j = first[k], second[k]
-        key = i * n + j
-        keys[kept], key_i[kept], key_j[kept] = key, i, j
-        while joined < jointed.shape[0] and jointed[joined] < key:
-            joined += 1
-        keep = (dynamic[i] != 0 or dynamic[j] != 0) and not (joined < jointed.shape[0] and jointed[joined] == key)
-        kept += 1 if keep else 0
-    return kept
 
 
-@njit(cache=True)
-def _candidate_pairs(aabb, dynamic, jointed):
-    """Pairs ``i < j`` of bodies whose AABBs ``aabb`` (:func:`_aabbs`) overlap or touch,
-    not both static and not joined (``jointed``: sorted keys, padded with ``NO_PAIR``),
-    as sorted keys ``i * n + j`` and their ``i`` and ``j``: the strip grid's from
-    ``STRIP_GRID_MIN_BODIES`` bodies on, otherwise (and for wide scatters) swept."""
-    n = aabb.shape[0]
-    valid, cell_size, lowest_y, highest_y = _check_and_measure(aabb)
-    pairs = np.empty((0, 2), dtype=np.int64)
-    swept = True
-    if valid and n >= STRIP_GRID_MIN_BODIES and 0.0 < cell_size < math.inf:
-        bottom, top = math.floor(lowest_y / cell_size), math.floor(highest_y / cell_size)
-        if max(abs(bottom), abs(top)) < MAX_STRIP_INDEX:
-            lowest, highest, entries = _strips(aabb, cell_size, DEFAULT_MAX_STRIPS_PER_BODY)
-            if not (entries and top - bottom >= DENSE_STRIPS_PER_ENTRY * entries + 1024):
-                pairs = _grid_pairs(aabb, np.argsort(aabb[:, 0]), lowest, highest, DEFAULT_MAX_STRIPS_PER_BODY)
-                swept = False
-    if swept:
-        pairs = _swept_pairs(aabb)
-    # Not both static, not joined.
-    m = pairs.shape[0]
-    kept_pairs = np.empty((3, m), dtype=np.int64)
-    keys, key_i, key_j = kept_pairs[0], kept_pairs[1], kept_pairs[2]
-    kept = _kept_pairs(pairs[:, 0], pairs[:, 1], m, dynamic, jointed, keys, key_i, key_j)
-    return keys[:kept], key_i[:kept], key_j[:kept]
 
 
-@njit(cache=True)
-def _swept_pairs(aabb):
-    """Every pair ``i < j`` of the boxes ``aabb`` (rows min x, min y, max x, max y) that
-    overlap or touch, sorted: a sort-and-sweep along the axis over which the boxes'
-    minimum corners spread wider (a hanging chain or a stack is swept along y), for the
-    few bodies or the wide scatters that the strip grid does not take.  A few bodies or
-    pairs are sorted by insertion (numba's sorts cost about 0.3 us even for three values)."""
-    n = aabb.shape[0]
-    axis = _sweep_axis(aabb)
-    if n <= INSERTION_SORT_MAX:
-        rank = np.empty(n, dtype=np.int64)
-        _insertion_rank(aabb, axis, rank)
-    else:
-        rank = np.argsort(aabb[:, axis])
-    swept = np.empty((n, 4))
-    _swept_boxes(aabb, rank, axis, swept)
-    first = np.empty(4 * n + 16, dtype=np.int64)
-    second = np.empty(4 * n + 16, dtype=np.int64)
-    found, r = _sweep(swept, rank, first, second, 0, 0)
-    while r < n:            # the buffers ran short: larger ones, and on from box r
-        first, second = _grown(first, found + n - r), _grown(second, found + n - r)
-        found, r = _sweep(swept, rank, first, second, found, r)
-    if found > INSERTION_SORT_MAX:
-        return _sorted_grid_pairs(first[:found], second[:found], n)
-    pairs = np.empty((found, 2), dtype=np.int64)
-    _insertion_sort_pairs(first, second, found, pairs[:, 0], pairs[:, 1])
-    return pairs
 
 
-@njit(cache=True)
-def _sweep_axis(aabb):
-    """The axis (0: x, 1: y) over which the boxes' minimum corners spread wider: the
-    sweep runs along it and tests the other."""
-    low_x, high_x, low_y, high_y = math.inf, -math.inf, math.inf, -math.inf
-    for i in range(aabb.shape[0]):
-        low_x, high_x = min(low_x, aabb[i, 0]), max(high_x, aabb[i, 0])
-        low_y, high_y = min(low_y, aabb[i, 1]), max(high_y, aabb[i, 1])
-    return 1 if high_y - low_y > high_x - low_x else 0
 
 
-@njit(cache=True)
-def _insertion_rank(aabb, axis, rank):
-    """The boxes in order of their minimum along ``axis`` into ``rank``, by insertion,
-    taking them from the end if they come in descending order (a chain hanging from its
-    first link): nearly sorted input costs O(n) then."""
-    n = aabb.shape[0]
-    descending = n > 0 and aabb[n - 1, axis] < aabb[0, axis]
-    for t in range(n):
-        r = n - 1 - t if descending else t
-        q = t - 1
-        while q >= 0 and aabb[rank[q], axis] > aabb[r, axis]:
-            rank[q + 1] = rank[q]
-            q -= 1
-        rank[q + 1] = r
 
 
-@njit(cache=True)
-def _swept_boxes(aabb, rank, axis, swept):
-    """The boxes in ``rank`` order into ``swept`` (contiguous): columns min and max along
-    ``axis``, then along the other.  (The sweep does not branch on the other axis's test:
-    every pair in the window is written, and counted if the boxes overlap there too.)"""
-    other = 1 - axis
-    for r in range(rank.shape[0]):
-        swept[r, 0], swept[r, 1] = aabb[rank[r], axis], aabb[rank[r], axis + 2]
-        swept[r, 2], swept[r, 3] = aabb[rank[r], other], aabb[rank[r], other + 2]
 
 
-@njit(cache=True)
-def _insertion_sort_pairs(first, second, found, sorted_first, sorted_second):
-    """The first ``found`` pairs sorted by (first, second) into ``sorted_*``, by insertion."""
-    for k in range(found):
-        i, j = first[k], second[k]
-        q = k - 1
-        while q >= 0 and (sorted_first[q] > i or (sorted_first[q] == i and sorted_second[q] > j)):
-            sorted_first[q + 1], sorted_second[q + 1] = sorted_first[q], sorted_second[q]
-            q -= 1
-        sorted_first[q + 1], sorted_second[q + 1] = i, j
 
 
-@njit(cache=True)
-def _sweep(swept, rank, first, second, found, start):
-    """The sweep of :func:`_swept_pairs` from box ``start`` (in sweep order) on, writing
-    pairs from ``found``; stops at the first box for whose every possible partner the
-    buffers have no room.  Returns the pairs written and where it stopped (``n``: done).
-    (A separate function: growing the buffers inside the loop made the whole sweep
-    three times slower.)"""
-    n = rank.shape[0]
-    for r in range(start, n):
-        if found + n - r > first.shape[0]:          # room for every pair this box can add
-            return found, r
-        i, reach, low, high = rank[r], swept[r, 1], swept[r, 2], swept[r, 3]
-        for s in range(r + 1, n):
-            if swept[s, 0] > reach:
-                break
-            j = rank[s]
-            first[found], second[found] = min(i, j), max(i, j)
-            found += 0 if (swept[s, 2] > high) | (low > swept[s, 3]) else 1
-    return found, n
 
 
 @njit(cache=True, _nrt=False)     # (without reference counts: see _step_on_pairs)
@@ -641,9 +375,9 @@ def _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, imp
                 velocity[b, 1] += imb[q] * impulse * ny[q]
                 velocity[b, 2] += iib[q] * rn_b[q] * impulse
     if r == joint_a.shape[0]:
-        _sweeps(velocity, groups, group_values, rows, solution, iterations, True, False, False, False)
+        sweep_groups(velocity, groups, group_values, rows, solution, iterations, True, False, False, False)
     else:           # some joints hold two static bodies: the first r rows only
-        _sweeps(velocity, groups[:, :r], group_values[:, :r], rows[:, :r], solution[:, :r], iterations, True, False,
+        sweep_groups(velocity, groups[:, :r], group_values[:, :r], rows[:, :r], solution[:, :r], iterations, True, False,
                 False, False)
     for q in range(r):
         impulses[joint_of[q]] = total[q]
@@ -667,13 +401,13 @@ def _soft_step(position, angle, velocity, properties, ints, floats):
     :mod:`~solutions.body_state` names them; a body is dynamic where its inverse mass is
     not 0 and turns where its inverse inertia is not, as the state's ``dynamic`` and
     ``turning`` say)
-    with the sections of ``ints`` and ``floats`` (:func:`_layout`): ``parameters`` and
+    with the sections of ``ints`` and ``floats`` (:func:`~solutions.response.soft_step_layout.layout`): ``parameters`` and
     ``switches`` (``PARAMETER_*``, ``SWITCH_*``), the joints' constants (``JOINT_*``)
     and impulses.  The contact
     points (``POINT_*``) live in two buffers, ``memory_*[0]`` and ``memory_*[1]``, of
     ``2 * capacity`` points each: the step reads the last step's from the one ``figures``
     names and writes its own into the other, then updates ``figures`` (``FIGURE_*``).
-    Every other array of the step is a view of the work spaces (:func:`_work_sizes`).
+    Every other array of the step is a view of the work spaces (:func:`~solutions.response.soft_step_layout.work_sizes`).
     Returns 0, or, having changed nothing, the number of candidate pairs the buffers
     must be made for (more than ``capacity``)."""
     # 1. Candidate pairs: from STRIP_GRID_MIN_BODIES bodies on, the strip grid's, which
@@ -681,26 +415,13 @@ def _soft_step(position, angle, velocity, properties, ints, floats):
     if angle.shape[0] < STRIP_GRID_MIN_BODIES:
         none = ints[:0]
         return _step_on_pairs(none, none, none, position, angle, velocity, properties, ints, floats)
-    switches, _, joint_ints, _, _, parameters, _, _, _, work_floats = _sections(angle.shape[0], ints, floats)
-    _, aabb = _faces_and_aabbs(position, angle, properties[:, EXTENT_X:EXTENT_Y + 1], parameters[PARAMETER_MARGIN],
+    switches, _, joint_ints, _, _, parameters, _, _, _, work_floats = sections(angle.shape[0], ints, floats)
+    _, aabb = faces_and_aabbs(position, angle, properties[:, EXTENT_X:EXTENT_Y + 1], parameters[PARAMETER_MARGIN],
                                switches[SWITCH_CIRCLES] != 0, switches[SWITCH_CORNER_ROUNDING], work_floats)
-    keys, key_i, key_j = _candidate_pairs(aabb, properties[:, INVERSE_MASS], joint_ints[JOINT_PAIRS])
+    keys, key_i, key_j = candidate_pairs(aabb, properties[:, INVERSE_MASS], joint_ints[JOINT_PAIRS])
     return _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, ints, floats)
 
 
-@njit(cache=True, inline="always")
-def _sections(n, ints, floats):
-    """The sections of ``ints`` and ``floats`` (:func:`_layout`) as arrays: switches,
-    figures, joint integers, point buffers, work space; parameters, joint floats, joint
-    impulses, point buffers, work space."""
-    joints, capacity = ints[HEADER_JOINTS], ints[HEADER_CAPACITY]
-    (switches_at, figures_at, joint_ints_at, memory_ints_at, work_ints_at, ints_end, joint_floats_at,
-     impulses_at, memory_floats_at, work_floats_at, floats_end) = _layout(n, joints, capacity)
-    return (ints[switches_at:figures_at], ints[figures_at:joint_ints_at],
-            ints[joint_ints_at:memory_ints_at].reshape((3, joints)),
-            ints[memory_ints_at:work_ints_at].reshape((2, 2 * capacity, 4)), ints[work_ints_at:ints_end],
-            floats[:joint_floats_at], floats[joint_floats_at:impulses_at].reshape((joints, 7)), floats[impulses_at:memory_floats_at],
-            floats[memory_floats_at:work_floats_at].reshape((2, 2 * capacity, 7)), floats[work_floats_at:floats_end])
 
 
 #: Compiled without numba's reference counts (``_nrt=False``): each array view a
@@ -715,9 +436,9 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     """The rest of :func:`_soft_step` from the candidate pairs ``keys`` (``i * n + j``),
     ``key_i`` and ``key_j``: manifolds, prestep, sub-steps, restitution, memory.  For
     fewer than ``STRIP_GRID_MIN_BODIES`` bodies the pairs come empty and are found here
-    (:func:`_few_candidate_pairs`)."""
+    (:func:`few_candidate_pairs`)."""
     (switches, figures, joint_ints, memory_ints, work_ints, parameters, joint_floats, joint_impulses,
-     memory_floats, work_floats) = _sections(angle.shape[0], ints, floats)
+     memory_floats, work_floats) = sections(angle.shape[0], ints, floats)
     dt_ratio, h = parameters[PARAMETER_DT_RATIO], parameters[PARAMETER_H]
     gravity_x, gravity_y = parameters[PARAMETER_GRAVITY_X], parameters[PARAMETER_GRAVITY_Y]
     max_push, restitution_threshold = parameters[PARAMETER_MAX_PUSH], parameters[PARAMETER_RESTITUTION_THRESHOLD]
@@ -743,13 +464,13 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     # ``fi``), after the faces, the AABBs and the sweep's copy of them.
     fi = 24 * n
     capacity = memory_ints.shape[1] // 2
-    few_work, ii = _take(work_ints, 0, 2 * n + 3 * capacity + 1)
-    few_keys, ii = _take(work_ints, ii, capacity)
-    few_i, ii = _take(work_ints, ii, capacity)
-    few_j, ii = _take(work_ints, ii, capacity)
+    few_work, ii = take(work_ints, 0, 2 * n + 3 * capacity + 1)
+    few_keys, ii = take(work_ints, ii, capacity)
+    few_i, ii = take(work_ints, ii, capacity)
+    few_j, ii = take(work_ints, ii, capacity)
     if n < STRIP_GRID_MIN_BODIES:       # 1. candidate pairs (for more bodies: _soft_step's)
-        faces, aabb = _faces_and_aabbs(position, angle, half, margin, circles, corner_rounding, work_floats)
-        m = _few_candidate_pairs(aabb, inverse_mass, jointed, few_work, work_floats[20 * n:24 * n].reshape((n, 4)),
+        faces, aabb = faces_and_aabbs(position, angle, half, margin, circles, corner_rounding, work_floats)
+        m = few_candidate_pairs(aabb, inverse_mass, jointed, few_work, work_floats[20 * n:24 * n].reshape((n, 4)),
                                  few_keys, few_i, few_j)
         if m < 0:
             return capacity + n
@@ -760,20 +481,20 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     m = keys.shape[0]
     if 2 * m > memory_ints.shape[1]:
         return m
-    block, ii = _take(work_ints, ii, 2 * m)
+    block, ii = take(work_ints, ii, 2 * m)
     features = block.reshape((m, 2))
     features[:] = CIRCLE_FEATURE
-    block, ii = _take(work_ints, ii, MANIFOLD_INTS * m)
+    block, ii = take(work_ints, ii, MANIFOLD_INTS * m)
     manifold_ints = block.reshape((MANIFOLD_INTS, m))
-    block, fi = _take(work_floats, fi, MANIFOLD_FLOATS * m)
+    block, fi = take(work_floats, fi, MANIFOLD_FLOATS * m)
     manifold_floats = block.reshape((MANIFOLD_FLOATS, m))
     found, count = manifold_ints[MANIFOLD_FOUND], manifold_ints[MANIFOLD_COUNT]
     if circles:
         _circle_manifolds(key_i, key_j, position, half, manifold_ints, manifold_floats)
     else:
-        clipping_floats, fi = _take(work_floats, fi, CLIPPING_FLOATS)
-        clipping_ints, ii = _take(work_ints, ii, CLIPPING_INTS)
-        _indexed_manifolds(faces, key_i, key_j, margin, incident_rounding, manifold_ints, manifold_floats,
+        clipping_floats, fi = take(work_floats, fi, CLIPPING_FLOATS)
+        clipping_ints, ii = take(work_ints, ii, CLIPPING_INTS)
+        indexed_manifolds(faces, key_i, key_j, margin, incident_rounding, manifold_ints, manifold_floats,
                            clipping_floats, clipping_ints)
         ref_is_b, ref_face = manifold_ints[MANIFOLD_REFERENCE_IS_B], manifold_ints[MANIFOLD_REFERENCE_FACE]
         inc_face = manifold_ints[MANIFOLD_INCIDENT_FACE]
@@ -791,13 +512,13 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
             p_count += count[k]
     # Each array below is a row of a block of the work space (allocations were half the
     # cost of a step of a small world).
-    block, ii = _take(work_ints, ii, 5 * g_count)
+    block, ii = take(work_ints, ii, 5 * g_count)
     group_ints = block.reshape((5, g_count))
     man_pair, man_count, man_first = group_ints[0], group_ints[1], group_ints[2]
-    block, ii = _take(work_ints, ii, 6 * p_count)
+    block, ii = take(work_ints, ii, 6 * p_count)
     point_ints = block.reshape((6, p_count))
     a, b, feature, pair_key = point_ints[0], point_ints[1], point_ints[2], point_ints[3]
-    block, fi = _take(work_floats, fi, 27 * p_count)
+    block, fi = take(work_floats, fi, 27 * p_count)
     points_in_order = block.reshape((27, p_count))      # manifold order
     nx, ny, px, py, sep = (points_in_order[0], points_in_order[1], points_in_order[2], points_in_order[3],
                            points_in_order[4])
@@ -819,7 +540,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
 
     # 3. The prestep (ContactPreparation.prepare and SoftStepSolver.begin_step).
     # Without rotation the contacts see no inertia and no angular velocity.
-    block, fi = _take(work_floats, fi, 6 * n)
+    block, fi = take(work_floats, fi, 6 * n)
     body_floats = block[:4 * n].reshape((4, n))
     body_floats[:] = 0.0
     contact_inertia = inverse_inertia if rotation else body_floats[0]
@@ -859,7 +580,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     normal_total[:] = 0.0
     tangent_total[:] = 0.0
     if warm_start:
-        recall_work, _ = _take(work_ints, ii, p_count + old_key.shape[0])
+        recall_work, _ = take(work_ints, ii, p_count + old_key.shape[0])
         _recall(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_normal, old_tangent,
                 man_first, man_count, match_distance, normal_total, tangent_total, recall_work)
         for k in range(p_count):
@@ -873,7 +594,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
 
     # The rows in sweep order (ContactPreparation._sweep_rows).
     ii += p_count + old_key.shape[0]      # (the matching's work space)
-    block, ii = _take(work_ints, ii, 2 * n)
+    block, ii = take(work_ints, ii, 2 * n)
     body_flags = block.reshape((2, n))
     body_flags[:] = 0
     movable, in_contact = body_flags[0], body_flags[1]
@@ -882,12 +603,12 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     body_a, body_b = group_ints[3], group_ints[4]
     for q in range(g_count):
         body_a[q], body_b[q] = a[man_first[q]], b[man_first[q]]
-    block, ii = _take(work_ints, ii, 2 * g_count + n + 2)
-    manifold_order, ii = _take(work_ints, ii, g_count)
+    block, ii = take(work_ints, ii, 2 * g_count + n + 2)
+    manifold_order, ii = take(work_ints, ii, g_count)
     _sweep_order(body_a, body_b, movable, colours, block, manifold_order)
     order, sweep_position = point_ints[4], point_ints[5]
     # The kernel's blocks (solutions.solver.kernel_numba): groups and rows in sweep order.
-    block, ii = _take(work_ints, ii, 5 * g_count)
+    block, ii = take(work_ints, ii, 5 * g_count)
     groups = block.reshape((5, g_count))
     groups[:] = 0
     g_a, g_b, first, row_count = groups[GROUP_A], groups[GROUP_B], groups[GROUP_FIRST], groups[GROUP_COUNT]
@@ -899,7 +620,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
         for s in range(man_count[src]):
             order[r] = man_first[src] + s
             r += 1
-    block, fi = _take(work_floats, fi, 9 * g_count)
+    block, fi = take(work_floats, fi, 9 * g_count)
     group_floats = block.reshape((9, g_count))
     group_floats[:] = 0.0
     g_nx, g_ny, g_ima, g_imb, g_iia = group_floats[0], group_floats[1], group_floats[2], group_floats[3], group_floats[4]
@@ -916,7 +637,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
             if block_solver and max(c11, c22) ** 2 < MAX_CONDITION_NUMBER * (c11 * c22 - c12 * c12):
                 solved_as_block[q] = 1
                 k11[q], k12[q], k22[q] = c11, c12, c22
-    block, fi = _take(work_floats, fi, 19 * p_count)
+    block, fi = take(work_floats, fi, 19 * p_count)
     block[:] = 0.0
     rows = block[:8 * p_count].reshape((8, p_count))    # ROW_*: rn_a, rn_b, rt_a, rt_b, masses, friction, lower bound
     s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal = rows[0], rows[1], rows[2], rows[3], rows[4]
@@ -940,7 +661,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     static_count = 0
     for i in range(n):
         static_count += 1 if in_contact[i] and inverse_mass[i] == 0.0 else 0
-    static_members, ii = _take(work_ints, ii, static_count)
+    static_members, ii = take(work_ints, ii, static_count)
     static_count = 0
     for i in range(n):
         if in_contact[i] and inverse_mass[i] == 0.0:
@@ -952,8 +673,8 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
         separation[k] = sep[k]
     separation_is_current = True     # (later: the relax pass's, or computed again without relax)
     joint_count = joint_a.shape[0]
-    joint_block, ii = _take(work_ints, ii, 6 * joint_count)
-    joint_values, fi = _take(work_floats, fi, 25 * joint_count)
+    joint_block, ii = take(work_ints, ii, 6 * joint_count)
+    joint_values, fi = take(work_floats, fi, 25 * joint_count)
     joint_work = _joint_rows(joint_block.reshape((6, joint_count)), joint_values.reshape((25, joint_count)))
     joint_rows = -1     # joint rows made at the current poses (-1: none yet)
     for _ in range(substeps):
@@ -989,7 +710,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
                         mass_scale[r], impulse_scale[r] = mass_scale_soft[r], impulse_scale_soft[r]
                     else:
                         target[r], mass_scale[r], impulse_scale[r] = 0.0, 1.0, 0.0
-                _sweeps(velocity, groups, group_floats, rows, solution, iterations, True, False, True, True)
+                sweep_groups(velocity, groups, group_floats, rows, solution, iterations, True, False, True, True)
                 if biased:
                     for r in range(p_count):
                         max_normal[r] = max(max_normal[r], normal_s[r])
@@ -1022,7 +743,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
             bouncing = bouncing or bounce
         if bouncing:
             impulse_scale[:] = 0.0
-            _sweeps(velocity, groups, group_floats, rows, solution, 1, True, False, False, False)
+            sweep_groups(velocity, groups, group_floats, rows, solution, 1, True, False, False, False)
             _zero_static_velocities(velocity, static_members)
     for r in range(p_count):
         normal_total[order[r]], tangent_total[order[r]] = normal_s[r], tangent_s[r]
@@ -1048,7 +769,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
 class CompiledSoftStep:
     """The soft step of :meth:`World.step` compiled whole, for a world of boxes or of discs (module docstring).
 
-    Holds two arrays, ``ints`` and ``floats``, whose sections (:func:`_layout`) are also
+    Holds two arrays, ``ints`` and ``floats``, whose sections (:func:`~solutions.response.soft_step_layout.layout`) are also
     its attributes: the settings (``parameters``, ``switches``), the step's ``figures``,
     the joints (``joint_ints``, ``joint_floats``) with their last impulses, two buffers of contact points
     (``memory_ints``, ``memory_floats``; columns ``POINT_*``): the last step's, which are
@@ -1120,7 +841,7 @@ class CompiledSoftStep:
         self.previous_h = h
 
     def make_buffers(self, capacity: int) -> None:
-        """``ints`` and ``floats`` (:func:`_layout`) for ``capacity`` candidate pairs (up to
+        """``ints`` and ``floats`` (:func:`~solutions.response.soft_step_layout.layout`) for ``capacity`` candidate pairs (up to
         ``2 * capacity`` points), everything but the work space kept: the settings, the
         figures, the joints' constants and impulses and the last step's points (which
         must fit); and each section as an attribute (a view)."""
@@ -1129,17 +850,17 @@ class CompiledSoftStep:
             raise ValueError(f"buffers for {capacity} pairs cannot keep the last step's "
                              f"{self.figures[FIGURE_POINTS]} points")
         n, joints = self.body_count, self.joint_count
-        layout = _layout(n, joints, capacity)
-        ints, floats = np.zeros(layout[5], np.int64), np.zeros(layout[10])
+        sizes = layout(n, joints, capacity)
+        ints, floats = np.zeros(sizes[5], np.int64), np.zeros(sizes[10])
         ints[HEADER_JOINTS], ints[HEADER_CAPACITY] = joints, capacity
         if held:
             points = min(self.memory_ints.shape[1], 2 * capacity)
             old_ints, old_floats, old_points = self.ints, self.floats, (self.memory_ints, self.memory_floats)
-            old_layout = _layout(n, joints, self.capacity)
-            ints[HEADER_COUNT:layout[3]] = old_ints[HEADER_COUNT:old_layout[3]]        # up to the point buffers
-            floats[:layout[8]] = old_floats[:old_layout[8]]
+            old_layout = layout(n, joints, self.capacity)
+            ints[HEADER_COUNT:sizes[3]] = old_ints[HEADER_COUNT:old_layout[3]]        # up to the point buffers
+            floats[:sizes[8]] = old_floats[:old_layout[8]]
         (switches, figures, joint_ints, memory_ints, work_ints, ints_end, joint_floats, impulses,
-         memory_floats, work_floats, floats_end) = layout
+         memory_floats, work_floats, floats_end) = sizes
         self.ints, self.floats, self.capacity = ints, floats, capacity
         self.switches, self.figures = ints[switches:figures], ints[figures:joint_ints]
         self.joint_ints = ints[joint_ints:memory_ints].reshape(3, joints)

@@ -76,7 +76,7 @@ def _friction(vxa, vya, wa, vxb, vyb, wb, nx, ny, ima, imb, iia, iib, rt_a, rt_b
 
 
 @njit(cache=True, error_model="numpy")
-def _sweeps(v, groups, group_values, rows, solution, iterations, accumulate, friction_first, use_friction,
+def sweep_groups(v, groups, group_values, rows, solution, iterations, accumulate, friction_first, use_friction,
             use_block):
     """The sweeps of :func:`solutions.solver.kernel.solve_constraints` (module docstring)
     over the blocks ``groups``, ``group_values``, ``rows`` and ``solution`` (``GROUP_*``,
@@ -185,7 +185,7 @@ def solve_constraints(velocity: np.ndarray, rows: ConstraintRows, iterations: in
     solution[SOLUTION_NORMAL], solution[SOLUTION_TANGENT] = normal_total, tangent_total
     solution[SOLUTION_TARGET], solution[SOLUTION_MASS_SCALE] = target, mass_scale
     solution[SOLUTION_IMPULSE_SCALE] = impulse_scale
-    _sweeps(velocity, groups, group_values, row_values, solution,
+    sweep_groups(velocity, groups, group_values, row_values, solution,
             int(iterations), bool(accumulate), bool(friction_first), bool(use_friction), bool(use_block))
     normal_total[:], tangent_total[:] = solution[SOLUTION_NORMAL], solution[SOLUTION_TANGENT]
 

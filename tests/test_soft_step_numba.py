@@ -191,7 +191,7 @@ def test_a_second_world_takes_the_bodies_and_the_first_keeps_its_state():
 def test_the_compiled_sweep_order_is_the_readable_one(order):
     """Random manifolds among a few bodies, some of them static: the same visiting order
     (the batches stably sorted) as solutions.solver.sweep_order."""
-    from solutions.response.soft_step_numba import _sweep_order
+    from solutions.solver.sweep_order_numba import sweep_order as compiled_sweep_order
     from solutions.solver.sweep_order import sweep_order
 
     rng = np.random.default_rng(7)
@@ -201,7 +201,7 @@ def test_the_compiled_sweep_order_is_the_readable_one(order):
         movable = rng.random(n) < 0.8
         want, _ = sweep_order(body_a, body_b, movable, order)
         got = np.empty(m, dtype=np.int64)
-        _sweep_order(body_a, body_b, movable, order == "colours", np.empty(2 * m + n + 2, dtype=np.int64), got)
+        compiled_sweep_order(body_a, body_b, movable, order == "colours", np.empty(2 * m + n + 2, dtype=np.int64), got)
         assert got.tolist() == want.tolist()
 
 

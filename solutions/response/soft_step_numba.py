@@ -50,8 +50,6 @@ from __future__ import annotations
 
 ### INSTRUCTOR ONLY: not in the student edition (it carries the compiled kernel and box clipping).
 
-import math
-
 import numpy as np
 from numba import njit
 
@@ -62,32 +60,33 @@ from ..narrowphase.box_pairs_numba import (CLIPPING_FLOATS, CLIPPING_INTS, MANIF
                                            MANIFOLD_NY, MANIFOLD_POINT, MANIFOLD_REFERENCE_FACE,
                                            MANIFOLD_REFERENCE_IS_B, MANIFOLD_SEPARATION, MANIFOLD_VERTEX,
                                            indexed_manifolds, matmul_rounding)
-from ..broadphase.pairs_numba import (STRIP_GRID_MIN_BODIES, candidate_pairs, faces_and_aabbs, few_candidate_pairs)
+from ..broadphase.pairs_numba import STRIP_GRID_MIN_BODIES, candidate_pairs, faces_and_aabbs, few_candidate_pairs
 from .soft_step_layout import (FIGURE_BLOCK_MANIFOLDS, FIGURE_CANDIDATE_PAIRS, FIGURE_MANIFOLDS, FIGURE_MEMORY,
                                FIGURE_POINTS, FIGURE_WARM_STARTED, HEADER_CAPACITY, HEADER_COUNT, HEADER_JOINTS,
-                               JOINT_A, JOINT_ANCHOR_AX, JOINT_ANCHOR_AY, JOINT_ANCHOR_BX, JOINT_ANCHOR_BY, JOINT_B,
-                               JOINT_DAMPING, JOINT_FREQUENCY, JOINT_LENGTH, JOINT_PAIRS, NO_PAIR,
-                               PARAMETER_DT_RATIO, PARAMETER_GRAVITY_X, PARAMETER_GRAVITY_Y, PARAMETER_H,
-                               PARAMETER_JOINT_SOFTNESS, PARAMETER_MARGIN, PARAMETER_MATCH_DISTANCE,
-                               PARAMETER_MAX_PUSH, PARAMETER_RESTITUTION_THRESHOLD, PARAMETER_SOFT, PARAMETER_STIFF,
-                               POINT_A, POINT_B, POINT_FEATURE, POINT_NORMAL_IMPULSE, POINT_NX, POINT_NY, POINT_PAIR,
-                               POINT_SEPARATION, POINT_TANGENT_IMPULSE, POINT_X, POINT_Y, SWITCH_BLOCK_SOLVER,
-                               SWITCH_CIRCLES, SWITCH_COLOURS, SWITCH_CORNER_ROUNDING, SWITCH_FRICTION,
-                               SWITCH_INCIDENT_ROUNDING, SWITCH_ITERATIONS, SWITCH_RELAX, SWITCH_ROTATION,
-                               SWITCH_SUBSTEPS, SWITCH_WARM_START, layout, sections, take)
-from ..narrowphase.circle_circle import COINCIDENT_CENTRES_ATOL, COINCIDENT_CENTRES_NORMAL
+                               JOINT_A, JOINT_B, JOINT_PAIRS, NO_PAIR, PARAMETER_DT_RATIO, PARAMETER_GRAVITY_X,
+                               PARAMETER_GRAVITY_Y, PARAMETER_H, PARAMETER_JOINT_SOFTNESS, PARAMETER_MARGIN,
+                               PARAMETER_MATCH_DISTANCE, PARAMETER_MAX_PUSH, PARAMETER_RESTITUTION_THRESHOLD,
+                               PARAMETER_SOFT, PARAMETER_STIFF, POINT_A, POINT_B, POINT_FEATURE,
+                               POINT_NORMAL_IMPULSE, POINT_NX, POINT_NY, POINT_PAIR, POINT_SEPARATION,
+                               POINT_TANGENT_IMPULSE, POINT_X, POINT_Y, SWITCH_BLOCK_SOLVER, SWITCH_CIRCLES,
+                               SWITCH_COLOURS, SWITCH_CORNER_ROUNDING, SWITCH_FRICTION, SWITCH_INCIDENT_ROUNDING,
+                               SWITCH_ITERATIONS, SWITCH_RELAX, SWITCH_ROTATION, SWITCH_SUBSTEPS, SWITCH_WARM_START,
+                               layout, sections, take)
 from ..narrowphase.speculative import SPECULATIVE_MARGIN
 from ..joints import DistanceJoint
 from ..shapes import OBB, Circle
 from ..solver.constraint_rows import MAX_CONDITION_NUMBER
-from ..solver.kernel_numba import (GROUP_A, GROUP_B, GROUP_BLOCK, GROUP_COUNT, GROUP_FIRST, GROUP_IIA, GROUP_IIB,
-                                   GROUP_IMA, GROUP_IMB, GROUP_NX, GROUP_NY, ROW_LOWER, ROW_MASS_NORMAL, ROW_RN_A,
-                                   ROW_RN_B, SOLUTION_IMPULSE_SCALE, SOLUTION_MASS_SCALE, SOLUTION_NORMAL,
-                                   SOLUTION_TANGENT, SOLUTION_TARGET, sweep_groups)
+from ..solver.kernel_numba import (GROUP_A, GROUP_B, GROUP_BLOCK, GROUP_COUNT, GROUP_FIRST, SOLUTION_IMPULSE_SCALE,
+                                   SOLUTION_MASS_SCALE, SOLUTION_NORMAL, SOLUTION_TANGENT, SOLUTION_TARGET,
+                                   sweep_groups)
 from .soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, soft_coefficients
 from .solver_settings import SolverStats
 from ..compiled_cache import forget_stale_machine_code
 from ..no_alias_compiler import NoAliasCompiler
+from ..narrowphase.circle_pairs_numba import CIRCLE_FEATURE, circle_manifolds
+from .contact_preparation_numba import recall_impulses, separations
+from ..solver.sweep_order_numba import sweep_order
+from ..joints_numba import joint_rows, solve_joints
 
 
 
@@ -120,268 +119,21 @@ from ..no_alias_compiler import NoAliasCompiler
 
 
 
-@njit(cache=True, _nrt=False)     # (without reference counts: see _step_on_pairs)
-def _sweep_order(body_a, body_b, movable, colours, work, order):
-    """:func:`solutions.solver.sweep_order.sweep_order`'s order (its batches, stably
-    sorted) into ``order``; ``work`` holds ``2 * m + n + 2`` integers for ``m``
-    manifolds and ``n`` bodies."""
-    m, n = body_a.shape[0], movable.shape[0]
-    batch, per_body, start = work[:m], work[m:m + n], work[m + n:2 * m + n + 2]
-    per_body[:] = 0
-    start[:] = 0
-    if colours:
-        used = per_body     # bit c: the body has colour c
-        for k in range(m):
-            i, j = body_a[k], body_b[k]
-            taken = (used[i] if movable[i] else 0) | (used[j] if movable[j] else 0)
-            c = 0
-            while (taken >> c) & 1:
-                c += 1
-            if c > 62:
-                raise ValueError("a body touches more than 62 colours of manifolds")
-            batch[k] = c
-            if movable[i]:
-                used[i] |= 1 << c
-            if movable[j]:
-                used[j] |= 1 << c
-    else:
-        after = per_body    # the first batch after the body's last manifold
-        for k in range(m):
-            i, j = body_a[k], body_b[k]
-            c = max(after[i] if movable[i] else 0, after[j] if movable[j] else 0)
-            batch[k] = c
-            if movable[i]:
-                after[i] = c + 1
-            if movable[j]:
-                after[j] = c + 1
-    # A stable sort by batch (a counting sort: batches are small numbers; numba's
-    # mergesort took 15 us for 590 manifolds, this 1 us).
-    for k in range(m):
-        start[batch[k] + 1] += 1
-    for c in range(1, m + 2):
-        start[c] += start[c - 1]
-    for k in range(m):
-        order[start[batch[k]]] = k
-        start[batch[k]] += 1
 
 
-@njit(cache=True, _nrt=False)     # (without reference counts: see _step_on_pairs)
-def _recall(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_normal, old_tangent,
-            first_of, count_of, match_distance, normal_total, tangent_total, work):
-    """``ContactPreparation._recall_impulses`` on arrays: per point, the old point of the
-    same pair with the same feature id, else the nearest untaken one within
-    ``match_distance``; their impulses go to ``normal_total``/``tangent_total``.
-    ``work`` holds as many integers as there are points, new and old."""
-    old_count = old_key.shape[0]
-    found, unmatched = work[:pair_key.shape[0]], work[pair_key.shape[0]:]
-    found[:] = -1
-    lo = 0
-    for g in range(first_of.shape[0]):
-        start, count = first_of[g], count_of[g]
-        key = pair_key[start]
-        # The old points of this pair: a contiguous run (both key lists are sorted).
-        while lo < old_count and old_key[lo] < key:
-            lo += 1
-        hi = lo
-        while hi < old_count and old_key[hi] == key:
-            hi += 1
-        for k in range(start, start + count):
-            for q in range(lo, hi):          # the last old point with this key, as a dict keeps it
-                if old_feature[q] == feature[k]:
-                    found[k] = q
-        left = 0
-        for q in range(lo, hi):
-            taken = False
-            for k in range(start, start + count):
-                if found[k] >= 0 and old_feature[found[k]] == old_feature[q]:
-                    taken = True
-            if not taken:
-                unmatched[left] = q
-                left += 1
-        for k in range(start, start + count):
-            if found[k] >= 0:
-                continue
-            if left == 0:
-                break
-            nearest, best = 0, math.inf
-            for u in range(left):
-                d = math.hypot(old_x[unmatched[u]] - px[k], old_y[unmatched[u]] - py[k])
-                if d < best:
-                    nearest, best = u, d
-            if best <= match_distance:
-                found[k] = unmatched[nearest]
-                for u in range(nearest, left - 1):
-                    unmatched[u] = unmatched[u + 1]
-                left -= 1
-    for k in range(found.shape[0]):
-        if found[k] >= 0:
-            normal_total[k], tangent_total[k] = old_normal[found[k]], old_tangent[found[k]]
 
 
-@njit(cache=True, inline="always")
-def _separations(position, angle, a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, r_cross_n_a,
-                 r_cross_n_b, depth, cos_less_1, sin, out):
-    """``SoftStepSolver.separations``: each point's separation now, in manifold order
-    (``cos_less_1`` and ``sin``, one per body, are work space)."""
-    for i in range(angle.shape[0]):
-        turned = angle[i] - start_angle[i]
-        cos_less_1[i], sin[i] = math.cos(turned) - 1.0, math.sin(turned)
-    for k in range(a.shape[0]):
-        i, j = a[k], b[k]
-        dx = (position[j, 0] - centre[j, 0]) - (position[i, 0] - centre[i, 0])
-        dy = (position[j, 1] - centre[j, 1]) - (position[i, 1] - centre[i, 1])
-        out[k] = (dx * nx[k] + dy * ny[k] + cos_less_1[j] * r_dot_n_b[k] + sin[j] * r_cross_n_b[k]
-                  - cos_less_1[i] * r_dot_n_a[k] - sin[i] * r_cross_n_a[k] - depth[k])
 
 
-#: The feature id of a disc-disc contact point (``("circle", "circle")``); box ids are 0..127.
-CIRCLE_FEATURE = 1 << 10
 
 
-@njit(cache=True)
-def _circle_manifolds(first, second, position, half, ints, floats):
-    """:func:`~solutions.narrowphase.circle_circle.collide_circle_circle` for every pair
-    of discs of radius ``half[:, 0]``, into ``ints`` and ``floats`` as the box manifolds
-    are (``MANIFOLD_*`` rows; one point per pair found)."""
-    ints[MANIFOLD_FOUND], ints[MANIFOLD_COUNT] = 0, 0
-    for k in range(first.shape[0]):
-        i, j = first[k], second[k]
-        dx, dy = position[j, 0] - position[i, 0], position[j, 1] - position[i, 1]
-        distance = math.hypot(dx, dy)
-        reach = half[i, 0] + half[j, 0]
-        if distance > reach:
-            continue
-        if distance <= COINCIDENT_CENTRES_ATOL:
-            ux, uy = COINCIDENT_CENTRES_NORMAL
-        else:
-            ux, uy = dx / distance, dy / distance
-        ints[MANIFOLD_FOUND, k], ints[MANIFOLD_COUNT, k] = 1, 1
-        floats[MANIFOLD_NX, k], floats[MANIFOLD_NY, k] = ux, uy
-        ax, ay = position[i, 0] + half[i, 0] * ux, position[i, 1] + half[i, 0] * uy
-        bx, by = position[j, 0] - half[j, 0] * ux, position[j, 1] - half[j, 0] * uy
-        floats[MANIFOLD_POINT, k], floats[MANIFOLD_POINT + 1, k] = (ax + bx) / 2, (ay + by) / 2
-        floats[MANIFOLD_SEPARATION, k] = -(reach - distance)
 
 
-@njit(cache=True, inline="always")     # (returns views: inlined into _step_on_pairs)
-def _joint_rows(ints, floats):
-    """Work space of :func:`_solve_joints` for ``count`` joints, made once per step from
-    ``ints`` (6, count) and ``floats`` (25, count): the kernel's four blocks (one group
-    of one row per joint, no block solve, no friction, no lower bound), the joint of
-    each row, and each row's length error (m) and inverse effective mass (1/kg)."""
-    count = ints.shape[1]
-    ints[:] = 0
-    floats[:] = 0.0
-    groups, joint_of = ints[:5], ints[5]
-    for k in range(count):
-        groups[GROUP_FIRST, k], groups[GROUP_COUNT, k] = k, 1
-    rows = floats[9:17]
-    rows[ROW_LOWER] = -np.inf
-    return groups, floats[:9], rows, floats[17:23], joint_of, floats[23], floats[24]
 
 
-@njit(cache=True)
-def _joint_geometry(position, angle, joint_a, joint_b, joint_floats, impulses, inverse_mass, inverse_inertia, work):
-    """Each joint's row at the current poses, written into ``work`` (:func:`_joint_rows`):
-    bodies, direction, lever arms, masses, length error.  A joint between two static
-    bodies gets no row and forgets its impulse.  Returns the number of rows."""
-    groups, group_values, rows, solution, joint_of, errors, inverses = work
-    a_of, b_of = groups[GROUP_A], groups[GROUP_B]
-    nx, ny = group_values[GROUP_NX], group_values[GROUP_NY]
-    ima, imb, iia, iib = (group_values[GROUP_IMA], group_values[GROUP_IMB], group_values[GROUP_IIA],
-                          group_values[GROUP_IIB])
-    rn_a, rn_b, mass = rows[ROW_RN_A], rows[ROW_RN_B], rows[ROW_MASS_NORMAL]
-    r = 0
-    for k in range(joint_a.shape[0]):
-        a, b = joint_a[k], joint_b[k]
-        ca, sa, cb, sb = math.cos(angle[a]), math.sin(angle[a]), math.cos(angle[b]), math.sin(angle[b])
-        anchor_ax, anchor_ay = joint_floats[k, JOINT_ANCHOR_AX], joint_floats[k, JOINT_ANCHOR_AY]
-        anchor_bx, anchor_by = joint_floats[k, JOINT_ANCHOR_BX], joint_floats[k, JOINT_ANCHOR_BY]
-        pax = position[a, 0] + ca * anchor_ax - sa * anchor_ay
-        pay = position[a, 1] + sa * anchor_ax + ca * anchor_ay
-        pbx = position[b, 0] + cb * anchor_bx - sb * anchor_by
-        pby = position[b, 1] + sb * anchor_bx + cb * anchor_by
-        dx, dy = pbx - pax, pby - pay
-        distance = math.hypot(dx, dy)
-        if distance > 1e-12:
-            ux, uy = dx / distance, dy / distance
-        else:
-            ux, uy = 1.0, 0.0
-        cra = (pax - position[a, 0]) * uy - (pay - position[a, 1]) * ux
-        crb = (pbx - position[b, 0]) * uy - (pby - position[b, 1]) * ux
-        inverse = inverse_mass[a] + inverse_mass[b] + inverse_inertia[a] * cra * cra + inverse_inertia[b] * crb * crb
-        if inverse == 0.0:          # two static bodies: no row, and no impulse to remember
-            impulses[k] = 0.0
-            continue
-        a_of[r], b_of[r], joint_of[r] = a, b, k
-        nx[r], ny[r], rn_a[r], rn_b[r] = ux, uy, cra, crb
-        ima[r], imb[r], iia[r], iib[r] = inverse_mass[a], inverse_mass[b], inverse_inertia[a], inverse_inertia[b]
-        mass[r] = 1.0 / inverse
-        errors[r], inverses[r] = distance - joint_floats[k, JOINT_LENGTH], inverse
-        r += 1
-    return r
 
 
-@njit(cache=True)
-def _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, impulses,
-                  inverse_mass, inverse_inertia, h, iterations, use_bias, softness, warm_starting, work,
-                  rows_made):
-    """:meth:`solutions.joints.JointSolver.solve` of the soft step on arrays: each joint
-    a bilateral row of the kernel (soft rod, or spring), warm started on the biased pass;
-    ``impulses`` (per joint, N s) are read and replaced; ``work`` from :func:`_joint_rows`.
 
-    ``rows_made``: -1, or the rows the last call made in ``work`` if the poses have not
-    moved since (the biased pass after a relax pass): their directions, lever arms and
-    masses are the same numbers, and only the targets and scales are made again.
-    Returns the number of rows, for the next call."""
-    groups, group_values, rows, solution, joint_of, errors, inverses = work
-    a_of, b_of = groups[GROUP_A], groups[GROUP_B]
-    nx, ny = group_values[GROUP_NX], group_values[GROUP_NY]
-    ima, imb, iia, iib = (group_values[GROUP_IMA], group_values[GROUP_IMB], group_values[GROUP_IIA],
-                          group_values[GROUP_IIB])
-    rn_a, rn_b = rows[ROW_RN_A], rows[ROW_RN_B]
-    total, target = solution[SOLUTION_NORMAL], solution[SOLUTION_TARGET]
-    mass_scale, impulse_scale = solution[SOLUTION_MASS_SCALE], solution[SOLUTION_IMPULSE_SCALE]
-    r = rows_made if rows_made >= 0 else _joint_geometry(position, angle, joint_a, joint_b, joint_floats, impulses,
-                                                         inverse_mass, inverse_inertia, work)
-    for q in range(r):
-        k = joint_of[q]
-        error, inverse = errors[q], inverses[q]
-        frequency = joint_floats[k, JOINT_FREQUENCY]
-        if frequency > 0:
-            omega = 2 * math.pi * frequency
-            spring_mass = 1.0 / inverse
-            k_spring, c_damp = spring_mass * omega * omega, 2 * spring_mass * joint_floats[k, JOINT_DAMPING] * omega
-            gamma = h * (c_damp + h * k_spring)
-            gamma = 1.0 / gamma if gamma > 0 else 0.0
-            target[q] = -error * h * k_spring * gamma
-            mass_scale[q], impulse_scale[q] = inverse / (inverse + gamma), gamma / (inverse + gamma)
-        elif not use_bias:
-            target[q], mass_scale[q], impulse_scale[q] = 0.0, 1.0, 0.0
-        else:
-            target[q], mass_scale[q], impulse_scale[q] = -softness[0] * error, softness[1], softness[2]
-        total[q] = impulses[k] if (warm_starting or not use_bias) else 0.0
-    if r == 0:
-        return r
-    if use_bias:        # warm start: last impulses first, A then B
-        for q in range(r):
-            impulse = total[q]
-            if impulse != 0.0:
-                a, b = a_of[q], b_of[q]
-                velocity[a, 0] -= ima[q] * impulse * nx[q]
-                velocity[a, 1] -= ima[q] * impulse * ny[q]
-                velocity[a, 2] -= iia[q] * rn_a[q] * impulse
-                velocity[b, 0] += imb[q] * impulse * nx[q]
-                velocity[b, 1] += imb[q] * impulse * ny[q]
-                velocity[b, 2] += iib[q] * rn_b[q] * impulse
-    if r == joint_a.shape[0]:
-        sweep_groups(velocity, groups, group_values, rows, solution, iterations, True, False, False, False)
-    else:           # some joints hold two static bodies: the first r rows only
-        sweep_groups(velocity, groups[:, :r], group_values[:, :r], rows[:, :r], solution[:, :r], iterations, True, False,
-                False, False)
-    for q in range(r):
-        impulses[joint_of[q]] = total[q]
-    return r
 
 
 @njit(cache=True, inline="always")
@@ -490,7 +242,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     manifold_floats = block.reshape((MANIFOLD_FLOATS, m))
     found, count = manifold_ints[MANIFOLD_FOUND], manifold_ints[MANIFOLD_COUNT]
     if circles:
-        _circle_manifolds(key_i, key_j, position, half, manifold_ints, manifold_floats)
+        circle_manifolds(key_i, key_j, position, half, manifold_ints, manifold_floats)
     else:
         clipping_floats, fi = take(work_floats, fi, CLIPPING_FLOATS)
         clipping_ints, ii = take(work_ints, ii, CLIPPING_INTS)
@@ -581,7 +333,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     tangent_total[:] = 0.0
     if warm_start:
         recall_work, _ = take(work_ints, ii, p_count + old_key.shape[0])
-        _recall(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_normal, old_tangent,
+        recall_impulses(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_normal, old_tangent,
                 man_first, man_count, match_distance, normal_total, tangent_total, recall_work)
         for k in range(p_count):
             normal_total[k] *= dt_ratio
@@ -605,7 +357,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
         body_a[q], body_b[q] = a[man_first[q]], b[man_first[q]]
     block, ii = take(work_ints, ii, 2 * g_count + n + 2)
     manifold_order, ii = take(work_ints, ii, g_count)
-    _sweep_order(body_a, body_b, movable, colours, block, manifold_order)
+    sweep_order(body_a, body_b, movable, colours, block, manifold_order)
     order, sweep_position = point_ints[4], point_ints[5]
     # The kernel's blocks (solutions.solver.kernel_numba): groups and rows in sweep order.
     block, ii = take(work_ints, ii, 5 * g_count)
@@ -675,8 +427,8 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     joint_count = joint_a.shape[0]
     joint_block, ii = take(work_ints, ii, 6 * joint_count)
     joint_values, fi = take(work_floats, fi, 25 * joint_count)
-    joint_work = _joint_rows(joint_block.reshape((6, joint_count)), joint_values.reshape((25, joint_count)))
-    joint_rows = -1     # joint rows made at the current poses (-1: none yet)
+    joint_work = joint_rows(joint_block.reshape((6, joint_count)), joint_values.reshape((25, joint_count)))
+    joint_rows_made = -1     # joint rows made at the current poses (-1: none yet)
     for _ in range(substeps):
         for i in range(n):
             if inverse_mass[i] != 0.0:      # dynamic
@@ -698,7 +450,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
                         velocity[b[k], 1] += imb[k] * iy
                         velocity[b[k], 2] += iib[k] * (rbx[k] * iy - rby[k] * ix)
                 if not (biased and separation_is_current):
-                    _separations(position, angle, a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, rn_a,
+                    separations(position, angle, a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, rn_a,
                                  rn_b, depth, body_cos_less_1, body_sin, separation)
                 separation_is_current = not biased      # positions move after a biased pass
                 for r in range(p_count):
@@ -716,10 +468,10 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
                         max_normal[r] = max(max_normal[r], normal_s[r])
                 _zero_static_velocities(velocity, static_members)
             if biased and joint_a.shape[0]:     # the joints: soft rods after the contacts
-                _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, joint_impulses, inverse_mass,
+                solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, joint_impulses, inverse_mass,
                               inverse_inertia, h, iterations, True, joint_softness, warm_start, joint_work,
-                              joint_rows)
-                joint_rows = -1                 # the positions move next
+                              joint_rows_made)
+                joint_rows_made = -1                 # the positions move next
             if biased:      # positions between the two passes
                 for i in range(n):
                     if inverse_mass[i] != 0.0:      # dynamic
@@ -728,7 +480,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
                     if inverse_inertia[i] != 0.0:       # turning
                         angle[i] += h * velocity[i, 2]
                 if relax and joint_a.shape[0]:
-                    joint_rows = _solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats,
+                    joint_rows_made = solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats,
                                                joint_impulses, inverse_mass, inverse_inertia, h, iterations, False,
                                                joint_softness, warm_start, joint_work, -1)
 

@@ -7,12 +7,15 @@ graded tests in a real sandbox, and checks the points and the message.
 """
 from __future__ import annotations
 
+import ast
 import os
+import re
 from pathlib import Path
 
 import pytest
 
 from grader.harness.run import load_spec, run_tests
+from grader.release.exercises import BEGIN_MARKER
 from grader.samples.example_class import (EXERCISES_DIR, SOLUTIONS_DIR, BuggySample, Replacement, build_buggy_sample,
                                           grade_probe)
 from grader.samples.shortcuts import BLIND_CALLERS, MANIFOLD_REPEATS_A_POINT, SHORTCUTS
@@ -187,3 +190,92 @@ def test_a_systematic_bug_loses_at_least_half_of_its_functions_points(tmp_path, 
     assert lost >= at_stake / 2, {name: r.score for name, r in results.items()}
     public = [r for r in results.values() if r.test.public and r.score < r.test.points]
     assert public, "a public test must catch it"
+
+
+# The solver exercise's answers: expressions of at least this many operations in the
+# solution blocks of its five functions, compared by shape (every name, attribute or
+# subscript the same), so that a vectorised or renamed copy is found too.
+SOLVER_ANSWER_OPERATIONS = 5
+SOLVER_EXERCISE = {"solver/contact_point.py": ("apply_normal_impulse", "apply_friction_impulse"),
+                   "solver/contact_sweeps.py": ("prestep_point", "contact_target", "sweep_contacts")}
+OPERATIONS = (ast.BinOp, ast.Compare, ast.Call, ast.IfExp, ast.UnaryOp)
+
+
+def expression_shape(node: ast.AST):
+    """``node`` with every name, attribute and subscript made the same; constants,
+    operators and called names kept."""
+    if isinstance(node, (ast.Name, ast.Attribute, ast.Subscript)):
+        return "value"
+    if isinstance(node, ast.Constant):
+        return repr(node.value)
+    if isinstance(node, ast.Call):
+        called = node.func.id if isinstance(node.func, ast.Name) else "value"
+        return ("call", called, *(expression_shape(a) for a in node.args))
+    parts = [type(node).__name__]
+    for value in ast.iter_fields(node):
+        items = value[1] if isinstance(value[1], list) else [value[1]]
+        parts += [expression_shape(v) if isinstance(v, ast.expr) else type(v).__name__
+                  for v in items if isinstance(v, ast.AST)]
+    return tuple(parts)
+
+
+def answer_shapes(source: str, functions) -> dict:
+    """{shape: source text} of the expressions of ``functions``' solution blocks with at
+    least :data:`SOLVER_ANSWER_OPERATIONS` operations, but for the normal velocity
+    ``v_n`` of ``apply_normal_impulse``: the input of ``contact_target``, which the
+    library measures to call it (``closing_speeds``), defined in the docstrings."""
+    lines, shapes, contract = source.splitlines(), {}, set()
+    for node in ast.walk(ast.parse(source)):
+        if not (isinstance(node, ast.FunctionDef) and node.name in functions):
+            continue
+        begin = next(k for k in range(node.lineno, node.end_lineno) if lines[k].strip() == BEGIN_MARKER)
+        for sub in ast.walk(node):
+            if isinstance(sub, ast.Assign) and ast.unparse(sub.targets[0]) == "normal_velocity":
+                contract |= {expression_shape(e) for e in ast.walk(sub.value) if isinstance(e, OPERATIONS)}
+            operations = sum(isinstance(e, OPERATIONS) for e in ast.walk(sub))
+            if isinstance(sub, OPERATIONS) and sub.lineno > begin + 1 and operations >= SOLVER_ANSWER_OPERATIONS:
+                shapes.setdefault(expression_shape(sub), ast.unparse(sub))
+    return {shape: text for shape, text in shapes.items() if shape not in contract}
+
+
+def holding(source: str, shapes: dict) -> list[str]:
+    return [f"line {node.lineno}: {ast.unparse(node)[:80]} (the answer {shapes[expression_shape(node)]})"
+            for node in ast.walk(ast.parse(source))
+            if isinstance(node, OPERATIONS) and expression_shape(node) in shapes]
+
+
+def test_no_library_module_of_the_student_package_holds_the_solver_exercises_answers():
+    shapes = {}
+    for module, functions in SOLVER_EXERCISE.items():
+        shapes.update(answer_shapes((SOLUTIONS_DIR / module).read_text(encoding="utf-8"), functions))
+    answers = set(shapes.values())
+    # The effective mass, the bounce above the threshold, the capped push and the visit.
+    assert {"ima + imb + iia * (rn_a * rn_a) + iib * (rn_b * rn_b)",
+            "-restitution * normal_velocity if normal_velocity < -restitution_threshold else 0.0",
+            "min(bias_factor / dt * max(depth - slop, 0.0), max_push)",
+            "mass_normal * mass_scale * (target - normal_velocity) - impulse_scale * normal_total"} <= answers
+    # The check finds an answer written another way (the library's vectorised prestep of before).
+    assert holding("k_normal = c.ima + c.imb + c.iia * (rn[:, 0] * rn[:, 0]) + c.iib * (rn[:, 1] * rn[:, 1])",
+                   shapes)
+    library = [path for path in EXERCISES_DIR.rglob("*.py")
+               if path.read_text(encoding="utf-8").startswith("# Library file")]
+    assert any(path.name == "contact_preparation.py" for path in library)
+    found = {str(path.relative_to(EXERCISES_DIR)): holding(path.read_text(encoding="utf-8"), shapes)
+             for path in library}
+    assert not {path: lines for path, lines in found.items() if lines}, found
+    # The visits' docstrings give the contract, not the update.
+    from exercises.solver import contact_point
+    for function in (contact_point.apply_normal_impulse, contact_point.apply_friction_impulse):
+        assert not re.search(r"dP\s*=|dT\s*=|max\(P \+ dP|-m_t v_t|w_B \+=", function.__doc__), function.__name__
+
+
+def test_the_student_packages_engine_runs_on_the_students_prestep():
+    # The library asks the exercise for each contact's rows: until prestep_point is
+    # written, a world with a contact cannot step (and it steps on the student's once it is).
+    from exercises.body import Body
+    from exercises.contact import Contact
+    from exercises.response.contact_solver import ContactSolver
+    ground = Body.box(10.0, 1.0, position=(0.0, -0.5), is_static=True)
+    box = Body.box(1.0, 1.0, position=(0.0, 0.5), velocity=(0.0, -1.0))
+    with pytest.raises(NotImplementedError, match="prestep_point"):
+        ContactSolver().solve([ground, box], [(0, 1, Contact((0.0, 1.0), 0.0, [(-0.5, 0.0)]))], dt=1 / 60)

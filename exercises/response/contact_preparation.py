@@ -4,8 +4,9 @@
 """The prestep shared by both contact solvers, and their memory of last step's impulses.
 
 :class:`ContactPreparation` gathers the bodies in contact and pre-computes, for every
-contact point at once, what the solver kernel needs (lever arms, effective masses,
-pair coefficients, the closing speeds), puts the points in sweep order as
+contact point, what the solver kernel needs (the lever arms and effective masses of
+the solver exercise's :func:`~exercises.solver.contact_sweeps.prestep_point`, pair
+coefficients, the closing speeds), puts the points in sweep order as
 :class:`~exercises.solver.constraint_rows.ConstraintRows`, recalls last step's
 impulses for warm starting and, after the solve, remembers this step's.  The plain
 step (:class:`~.contact_solver.ContactSolver`) and the soft step
@@ -22,6 +23,8 @@ import numpy as np
 from ..body import Body
 from ..contact import Contact
 from ..solver.constraint_rows import ConstraintRows, block_is_well_conditioned, normal_block_matrix
+from ..solver.contact_point import ContactPoint
+from ..solver.contact_sweeps import contact_target, prestep_point
 from ..solver.sweep_order import sweep_order
 from ..made_when_asked import MadeWhenAsked
 from ..twins import require_twins
@@ -44,14 +47,20 @@ def closing_speeds(velocity: np.ndarray, a: np.ndarray, b: np.ndarray, nx: np.nd
     return (vb[:, 0] - va[:, 0]) * nx + (vb[:, 1] - va[:, 1]) * ny + vb[:, 2] * rn_b - va[:, 2] * rn_a
 
 
-def restitution_targets(normal_velocity: np.ndarray, restitution: np.ndarray, threshold: float) -> np.ndarray:
-    """The separating speed restitution aims at (m/s): ``-e v_n`` where the point closes
-    faster than ``threshold`` (m/s), else 0 (resting contacts do not bounce).
+def contact_targets(normal_velocity: np.ndarray, restitution: np.ndarray, depth: np.ndarray, dt: float,
+                    settings: SolverSettings, bias_factor: float) -> np.ndarray:
+    """The separating normal velocity (m/s) each point's normal row aims at: the solver
+    exercise's :func:`~exercises.solver.contact_sweeps.contact_target` of every point, from
+    its closing speed (m/s), restitution and depth (m), with the threshold, slop and
+    push cap of ``settings`` and the Baumgarte ``bias_factor`` (0: no push).
 
-    >>> restitution_targets(np.array([-2.0, -0.5, 1.0]), np.array([0.5, 0.5, 0.5]), 1.0).tolist()
-    [1.0, 0.0, 0.0]
+    >>> contact_targets(np.array([-2.0, -0.5]), np.array([0.5, 0.5]), np.zeros(2), 0.01, SolverSettings(), 0.0).tolist()
+    [1.0, 0.0]
     """
-    return np.where(normal_velocity < -threshold, -restitution * normal_velocity, 0.0)
+    return np.array([contact_target(vn, e, d, dt, settings.restitution_threshold, bias_factor, settings.slop,
+                                    settings.max_push_velocity)
+                     for vn, e, d in zip(normal_velocity.tolist(), restitution.tolist(), depth.tolist())],
+                    dtype=float)
 
 
 @dataclass
@@ -67,8 +76,8 @@ class PreparedContacts:
     holds the per-point arrays of the prestep in manifold order; ``rows`` the kernel's
     rows (:class:`~exercises.solver.constraint_rows.ConstraintRows`) in sweep order,
     and ``order`` maps a sweep position to its index in manifold order.  Each solver
-    makes its restitution targets (:func:`restitution_targets`) from closing speeds it
-    measures when it needs them.
+    makes its targets (:func:`~exercises.solver.contact_sweeps.contact_target`) from
+    closing speeds it measures when it needs them.
     """
 
     local: dict
@@ -193,17 +202,16 @@ class ContactPreparation:
             friction[:] = 0.0
         nx, ny = normal[:, 0], normal[:, 1]
         r_a, r_b = point - centre[a], point - centre[b]
-        rn_a = r_a[:, 0] * ny - r_a[:, 1] * nx       # r x n
-        rn_b = r_b[:, 0] * ny - r_b[:, 1] * nx
-        rt_a = -(r_a[:, 0] * nx + r_a[:, 1] * ny)    # r x t with t = (ny, -nx)
-        rt_b = -(r_b[:, 0] * nx + r_b[:, 1] * ny)
         ima, imb = inverse_mass[a], inverse_mass[b]
         iia, iib = inverse_inertia[a], inverse_inertia[b]
-        k_normal = ima + imb + iia * rn_a**2 + iib * rn_b**2
-        k_tangent = ima + imb + iia * rt_a**2 + iib * rt_b**2
-        # A point between two static bodies gets mass 0: no impulse can move them.
-        mass_normal = np.divide(1.0, k_normal, out=np.zeros(point_count), where=k_normal > 0.0)
-        mass_tangent = np.divide(1.0, k_tangent, out=np.zeros(point_count), where=k_tangent > 0.0)
+        # Each point's lever arms and effective masses: the solver exercise's prestep (in the
+        # student edition the student's own), one row of ContactPoint's fields per point.
+        prestep = np.array([prestep_point(*arguments) for arguments in zip(
+            point.tolist(), normal.tolist(), centre[a].tolist(), centre[b].tolist(), ima.tolist(), imb.tolist(),
+            iia.tolist(), iib.tolist(), friction.tolist())], dtype=float).reshape(-1, len(ContactPoint._fields))
+        field = dict(zip(ContactPoint._fields, prestep.T))
+        rn_a, rn_b, rt_a, rt_b = field["rn_a"], field["rn_b"], field["rt_a"], field["rt_b"]
+        mass_normal, mass_tangent = field["mass_normal"], field["mass_tangent"]
         normal_velocity = closing_speeds(velocity, a, b, nx, ny, rn_a, rn_b)
 
         # Last step's accumulated impulses, matched by feature id or position.

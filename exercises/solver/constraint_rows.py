@@ -11,19 +11,19 @@ a group of one row.  The kernel (:mod:`exercises.solver.kernel`) visits the grou
 their stored order, which is the sweep order (:func:`exercises.solver.sweep_order.sweep_order`).
 
 Symbols: ``rn = r x n`` and ``rt = r x t`` for the lever arm ``r`` from a body's
-centre of mass to the point (m); ``K_n = 1/m_A + 1/m_B + rn_A^2 / I_A + rn_B^2 / I_B``
-the inverse effective mass along ``n`` (1/kg), and the same along ``t``.
+centre of mass to the point (m); ``K_n`` the inverse effective mass along ``n``
+(1/kg: the change of the row's relative velocity per unit impulse), and the same
+along ``t``; the effective masses ``1 / K`` are what the solver exercise's
+:func:`~exercises.solver.contact_sweeps.prestep_point` computes.
 
-Per row, the *soft constraint* of Box2D v3 (Erin Catto, "Solver2D") gives the impulse
-change of one visit::
-
-    dP = m_n mass_scale (target - v_n) - impulse_scale P          (N s)
-
-with the accumulated impulse ``P`` then clamped to ``[lower, inf)``: ``lower = 0``
-for a contact (it only pushes), ``-inf`` for a joint (it pulls too).  ``mass_scale =
-1``, ``impulse_scale = 0`` is the rigid constraint of box2d-lite and Box2D v2;
-``target`` is the wanted separating velocity (m/s): restitution, a position bias, or
-the push of a spring.  SI units throughout.
+One visit of a row (:func:`~exercises.solver.contact_point.apply_normal_impulse`)
+aims the row's relative velocity at ``target``, the wanted separating velocity
+(m/s): restitution, a position bias, or the push of a spring, with its accumulated
+impulse kept in ``[lower, inf)``: ``lower = 0`` for a contact (it only pushes),
+``-inf`` for a joint (it pulls too).  The *soft constraint* of Box2D v3 (Erin Catto,
+"Solver2D") scales a visit by ``mass_scale`` and ``impulse_scale``; ``mass_scale =
+1``, ``impulse_scale = 0`` is the rigid constraint of box2d-lite and Box2D v2.  SI
+units throughout.
 """
 from __future__ import annotations
 

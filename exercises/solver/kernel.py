@@ -18,11 +18,12 @@ restitution pass            ``-e v_n``                  1 on bouncing rows, else
 distance joint              ``-bias``                   rigid or spring
 ==========================  ==========================  ============================
 
-One visit of a row applies ``dP = m_n mass_scale (target - v_n) - impulse_scale P``
-and clamps the accumulated impulse ``P`` to ``[lower, inf)``; a friction row applies
-``dT = -m_t v_t`` with ``T`` clamped to ``[-mu P, mu P]`` (Coulomb).  Impulses are
-given to B along ``n`` (or ``t = (n_y, -n_x)``) and the opposite to A, with their
-torques ``r x P``.
+One visit of a row is the solver exercise's
+:func:`~exercises.solver.contact_point.apply_normal_impulse` (its accumulated impulse
+kept in ``[lower, inf)``) and of its friction
+:func:`~exercises.solver.contact_point.apply_friction_impulse` (kept within the
+Coulomb bound).  Impulses are given to B along ``n`` (or ``t = (n_y, -n_x)``) and the
+opposite to A, with their torques.
 
 Order within a group: with ``friction_first`` (Box2D v2: normal impulses have the last
 word), friction rows, then normal rows; else (Box2D v3) the normal rows and then
@@ -144,25 +145,21 @@ def solve_constraints(velocity: np.ndarray, rows: ConstraintRows, iterations: in
             points[k] = ContactPoint(nx_of[g], ny_of[g], rn_a[k], rn_b[k], rt_a[k], rt_b[k], ima_of[g], imb_of[g],
                                      iia_of[g], iib_of[g], mass_normal[k], mass_tangent[k], mu_of[k], lower_of[k])
 
-    # One row's friction visit; it reads the group's nx, ny and inverse masses, which the
-    # loop below sets before calling it (defined once, not once per group and sweep).
+    # One row's friction visit (defined once, not once per group and sweep).
     def friction(k, vxa, vya, wa, vxb, vyb, wb):
         """Row k's tangent impulse along t = (ny, -nx), within the Coulomb bound."""
-        mu = mu_of[k]
-        if not use_friction or mu == 0.0:
+        if not use_friction or mu_of[k] == 0.0:
             return vxa, vya, wa, vxb, vyb, wb
         if accumulate:
             (vxa, vya, wa), (vxb, vyb, wb), tangent[k] = apply_friction_impulse(
                 (vxa, vya, wa), (vxb, vyb, wb), points[k], normal[k], tangent[k])
             return vxa, vya, wa, vxb, vyb, wb
-        # Clamped increments: bounded by this sweep's normal increment, not the total.
-        tangent_velocity = (vxb - vxa) * ny - (vyb - vya) * nx + wb * rt_b[k] - wa * rt_a[k]
-        change = -mass_tangent[k] * tangent_velocity
-        bound = mu * normal_change[k]
-        change = min(max(change, -bound), bound)
+        # Clamped increments: a visit from a total of 0 bounded by this sweep's normal
+        # increment (not the total), its result added to the total.
+        (vxa, vya, wa), (vxb, vyb, wb), change = apply_friction_impulse(
+            (vxa, vya, wa), (vxb, vyb, wb), points[k], normal_change[k], 0.0)
         tangent[k] += change
-        return (vxa - ima * change * ny, vya + ima * change * nx, wa - iia * rt_a[k] * change,
-                vxb + imb * change * ny, vyb - imb * change * nx, wb + iib * rt_b[k] * change)
+        return vxa, vya, wa, vxb, vyb, wb
 
     for _ in range(iterations):
         for g in range(len(first_of)):
@@ -203,26 +200,14 @@ def solve_constraints(velocity: np.ndarray, rows: ConstraintRows, iterations: in
             else:
                 for k in group:
                     old = normal[k]
-                    if accumulate:   # the exercise: solutions/solver/contact_point.py
-                        (vxa, vya, wa), (vxb, vyb, wb), normal[k] = apply_normal_impulse(
-                            (vxa, vya, wa), (vxb, vyb, wb), points[k], old, target[k], mass_scale[k],
-                            impulse_scale[k])
-                        normal_change[k] = normal[k] - old
-                        continue
-                    # Clamped increments (the classic mistake, kept as a switch): v_n as above,
-                    # v_n = (v_B + w_B x r_B - v_A - w_A x r_A) . n, then each increment >= 0.
-                    normal_velocity = (vxb - vxa) * nx + (vyb - vya) * ny + wb * rn_b[k] - wa * rn_a[k]
-                    change = mass_normal[k] * mass_scale[k] * (target[k] - normal_velocity) - impulse_scale[k] * old
-                    change = max(change, lower_of[k])
-                    normal[k] += change
-                    normal_change[k] = change
-                    vxa -= ima * change * nx
-                    vya -= ima * change * ny
-                    wa -= iia * rn_a[k] * change
-                    vxb += imb * change * nx
-                    vyb += imb * change * ny
-                    wb += iib * rn_b[k] * change
-                    if not friction_first:   # each point's friction follows its normal
+                    # The exercise's visit (solutions/solver/contact_point.py).  Clamped
+                    # increments (the classic mistake, kept as a switch) are the same visit
+                    # with the total's floor raised to the old total plus ``lower``.
+                    point = points[k] if accumulate else points[k]._replace(lower=old + lower_of[k])
+                    (vxa, vya, wa), (vxb, vyb, wb), normal[k] = apply_normal_impulse(
+                        (vxa, vya, wa), (vxb, vyb, wb), point, old, target[k], mass_scale[k], impulse_scale[k])
+                    normal_change[k] = normal[k] - old
+                    if not accumulate and not friction_first:   # each point's friction follows its normal
                         vxa, vya, wa, vxb, vyb, wb = friction(k, vxa, vya, wa, vxb, vyb, wb)
             if not friction_first and (accumulate or block):
                 for k in group:

@@ -55,12 +55,12 @@ What ``solve`` does, in order
 -----------------------------
 1. Gather the bodies in contact: one row ``(vx, vy, w)`` per body (static bodies have
    1/m = 1/I = 0; with ``rotation=False`` every 1/I and every w is taken as 0).
-2. Prestep, per contact point (vectorised over all points): lever arms ``r_A``, ``r_B`` from the centres of mass;
-   effective masses along ``n`` and along the tangent ``t = (n_y, -n_x)``; the
-   restitution target ``-e v_n`` from the velocity before any impulse, used only when
-   the closing speed exceeds ``restitution_threshold`` (so resting contacts do not
-   bounce); for ``"baumgarte"`` the bias ``beta / dt * max(depth - slop, 0)``.  The
-   target separating speed is the larger of the two.
+2. Prestep, per contact point: lever arms and effective masses along ``n`` and along
+   the tangent ``t = (n_y, -n_x)`` (:func:`~solutions.solver.contact_sweeps.prestep_point`);
+   the target separating speed from the velocity before any impulse
+   (:func:`~solutions.solver.contact_sweeps.contact_target`): a bounce only above
+   ``restitution_threshold`` (so resting contacts do not bounce) and, for
+   ``"baumgarte"``, a push out of the overlap beyond ``slop``, the larger of the two.
 3. Warm start: apply the accumulated impulses remembered from the last step, matched by
    ``(body pair, feature id)`` (or, when ``Contact.feature_ids`` is None or names a
    feature the pair did not have, by the nearest old point of the pair within
@@ -100,7 +100,7 @@ from ..body import Body
 from ..body_state import BodyState
 from ..contact import Contact
 from ..solver.kernel import kernel
-from .contact_preparation import BACKENDS, ContactPreparation, PreparedContacts, closing_speeds, restitution_targets
+from .contact_preparation import BACKENDS, ContactPreparation, PreparedContacts, closing_speeds, contact_targets
 from .solver_settings import ORDERS, POSITION_CORRECTIONS, SolverSettings, SolverStats
 
 # The settings and figures live in solver_settings.py (the soft step reads them too).
@@ -221,9 +221,8 @@ class ContactSolver(ContactPreparation):
         position_bias = self.position_bias(c.depth, dt)
         nx, ny = c.normal[:, 0], c.normal[:, 1]
         normal_velocity = closing_speeds(velocity, c.a, c.b, nx, ny, c.columns["rn_a"], c.columns["rn_b"])
-        target = restitution_targets(normal_velocity, c.restitution, settings.restitution_threshold)[c.order]
-        if settings.position_correction == "baumgarte":
-            target = np.maximum(target, position_bias[c.order])
+        bias_factor = settings.baumgarte if settings.position_correction == "baumgarte" else 0.0
+        target = contact_targets(normal_velocity, c.restitution, c.depth, dt, settings, bias_factor)[c.order]
         velocity = self.apply_impulses(c, velocity, c.normal_total, c.tangent_total)   # 3. warm start
 
         # 4. Velocity sweeps, manifold by manifold in sweep order: the solver kernel with
@@ -259,13 +258,14 @@ class ContactSolver(ContactPreparation):
 
     def position_bias(self, depth: np.ndarray, dt: float) -> np.ndarray:
         """Separating speed (m/s) that removes ``baumgarte`` of the overlap beyond
-        ``slop`` in one step of ``dt``, capped at ``max_push_velocity``.
+        ``slop`` in one step of ``dt``, capped at ``max_push_velocity``: the push of
+        :func:`~solutions.solver.contact_sweeps.contact_target` at rest, without bounce.
 
         >>> ContactSolver().position_bias(np.array([0.0, 0.015, 1.0]), dt=0.01).round(12).tolist()
         [0.0, 0.2, 3.0]
         """
-        bias = self.settings.baumgarte / dt * np.maximum(depth - self.settings.slop, 0.0)
-        return np.minimum(bias, self.settings.max_push_velocity)
+        at_rest = np.zeros(len(depth))
+        return contact_targets(at_rest, at_rest, depth, dt, self.settings, self.settings.baumgarte)
 
     def correct_positions(self, bodies: list[Body], manifolds: list[tuple[int, int, Contact]]) -> None:
         """Linear projection (``position_correction="projection"``), after integration.

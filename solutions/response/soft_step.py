@@ -59,7 +59,7 @@ from ..body import Body
 from ..body_state import BodyState
 from ..contact import Contact
 from ..solver.kernel import kernel
-from .contact_preparation import ContactPreparation
+from .contact_preparation import ContactPreparation, contact_targets
 from .solver_settings import SoftStepSettings, SolverSettings
 
 
@@ -166,8 +166,7 @@ class SoftStepSolver(ContactPreparation):
         self._separation = -c.depth                            # at the poses of the start (manifold order)
         nx, ny = c.normal[:, 0], c.normal[:, 1]
         self._r_dot_n_a, self._r_dot_n_b = c.r_a[:, 0] * nx + c.r_a[:, 1] * ny, c.r_b[:, 0] * nx + c.r_b[:, 1] * ny
-        self._r_cross_n_a = c.r_a[:, 0] * ny - c.r_a[:, 1] * nx
-        self._r_cross_n_b = c.r_b[:, 0] * ny - c.r_b[:, 1] * nx
+        self._r_cross_n_a, self._r_cross_n_b = c.columns["rn_a"], c.columns["rn_b"]
         hertz = min(self.soft.contact_hertz, 0.25 / h)
         soft = soft_coefficients(hertz, self.soft.contact_damping_ratio, h)
         stiff = soft_coefficients(2.0 * hertz, self.soft.contact_damping_ratio, h)
@@ -230,21 +229,21 @@ class SoftStepSolver(ContactPreparation):
     def end_step(self, state: BodyState, h: float) -> None:
         """Restitution, then remember the impulses and fill ``stats``.
 
-        Restitution: one sweep over the points that closed faster than
-        ``restitution_threshold`` at the start of the step and pushed in some
-        sub-step, aiming at ``-e`` times that closing speed.
+        Restitution: one sweep over the points that pushed in some sub-step and whose
+        closing speed at the start of the step earns a bounce, aiming at that bounce
+        (:func:`~solutions.solver.contact_sweeps.contact_target` without a push).
         """
         c = self.prepared
         if c.point_count:
-            bounce = ((c.normal_velocity < -self.settings.restitution_threshold) & (self._max_normal > 0.0)
-                      & (c.restitution > 0.0))
+            rebound = contact_targets(c.normal_velocity, c.restitution, np.zeros(c.point_count), h, self.settings,
+                                      0.0)
+            bounce = (rebound > 0.0) & (self._max_normal > 0.0)
             if bounce.any():
                 velocity = state.velocity[self._rows]
                 normal, tangent = c.normal_total[c.order], c.tangent_total[c.order]
-                kernel(self.backend)(velocity, c.rows, 1, normal, tangent,
-                                              (-c.restitution * c.normal_velocity)[c.order],
-                                              bounce[c.order].astype(float), np.zeros(c.point_count),
-                                              use_friction=False, use_block=False)
+                kernel(self.backend)(velocity, c.rows, 1, normal, tangent, rebound[c.order],
+                                     bounce[c.order].astype(float), np.zeros(c.point_count),
+                                     use_friction=False, use_block=False)
                 c.normal_total[c.order], c.tangent_total[c.order] = normal, tangent
                 state.velocity[self._rows] = velocity * state.dynamic[self._rows, None]
         self.end_contacts(c, h)

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..solver import contact_sweeps
 from ..solver.contact_sweeps import ManifoldRows
-from .contact_preparation import PreparedContacts
+from .contact_preparation import PreparedContacts, closing_speeds
 from .contact_solver import ContactSolver
 from .solver_settings import SolverSettings
 
@@ -85,9 +85,7 @@ class SweepContactSolver(ContactSolver):
                 c.iia.tolist(), c.iib.tolist(), c.columns["friction"].tolist())])
         # The closing speeds after this step's forces, with the lever arms just found.
         rows = np.array(points, dtype=float).reshape(-1, 14)
-        va, vb = velocity[c.a], velocity[c.b]
-        normal_velocity = ((vb[:, 0] - va[:, 0]) * c.normal[:, 0] + (vb[:, 1] - va[:, 1]) * c.normal[:, 1]
-                           + vb[:, 2] * rows[:, 3] - va[:, 2] * rows[:, 2])
+        normal_velocity = closing_speeds(velocity, c.a, c.b, c.normal[:, 0], c.normal[:, 1], rows[:, 2], rows[:, 3])
         bias_factor = settings.baumgarte if settings.position_correction == "baumgarte" else 0.0
         targets = self.call_many("contact_target", [
             (vn, e, depth, dt, settings.restitution_threshold, bias_factor, settings.slop,

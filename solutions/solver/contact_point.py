@@ -4,18 +4,11 @@ friction impulse, each with accumulated clamping.
 The solver kernel (:func:`solutions.solver.kernel.solve_constraints`) sweeps over the
 contact points of all manifolds again and again; at each point it calls the two
 functions below, which are the heart of sequential impulses (Erin Catto's box2d-lite,
-Box2D, Chipmunk):
-
-1. the velocity of B's material point relative to A's, along the normal ``n``;
-2. the impulse change that would bring it to the wanted ``target``, through the
-   point's effective mass ``m_n = 1 / K_n``;
-3. **accumulated clamping**: the *total* impulse of this step stays ``>= 0`` (a
-   contact pushes, never pulls), so a later visit may take back part of what an
-   earlier one applied, but never more;
-4. the change is applied to B along ``n`` and the opposite to A, with its torques;
-5. friction along ``t = (n_y, -n_x)`` the same way, its total kept within the
-   Coulomb bound ``[-mu P, mu P]`` of the normal total ``P`` (so friction is weighed
-   with the normal impulse found so far).
+Box2D, Chipmunk).  A visit gives the point the impulse that brings its relative
+velocity along one direction where it should be, with **accumulated clamping**: what
+is kept within bounds is the *total* impulse of this step (a contact pushes, never
+pulls; friction stays within the Coulomb bound of the normal total found so far), so
+a later visit may take back part of what an earlier one applied, but never more.
 
 Conventions: SI units; ``n`` is a unit vector from body A to body B; ``rn = r x n``
 and ``rt = r x t`` for the lever arm ``r`` from a body's centre of mass to the point
@@ -24,6 +17,7 @@ rad/s); impulses in N s.
 """
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 
@@ -59,14 +53,15 @@ def apply_normal_impulse(velocity_a, velocity_b, point: ContactPoint, normal_tot
                          mass_scale: float = 1.0, impulse_scale: float = 0.0):
     """One visit of a contact point's normal row, with accumulated clamping.
 
-    The normal velocity of B's material point relative to A's is ``v_n = (v_B + w_B x
-    r_B - v_A - w_A x r_A) . n = (vx_B - vx_A) n_x + (vy_B - vy_A) n_y + w_B rn_B -
-    w_A rn_A``.  The impulse change is ``dP = m_n mass_scale (target - v_n) -
-    impulse_scale P`` (rigid: ``mass_scale = 1``, ``impulse_scale = 0``, so that
-    ``v_n`` becomes ``target``); the accumulated impulse becomes ``max(P + dP,
-    lower)`` and only the clamped change is applied: ``+change n`` to B, ``-change n``
-    to A, with the angular parts ``w_B += iib rn_B change`` and ``w_A -= iia rn_A
-    change``.
+    Contract: a rigid visit (``mass_scale = 1``, ``impulse_scale = 0``) leaves the
+    normal velocity of B's material point relative to A's at the point (``v_n``, m/s,
+    > 0 separating) equal to ``target``, unless that would take the accumulated
+    normal impulse below ``point.lower``: then the total stops at ``lower`` and
+    ``v_n`` stays short of the target.  The impulse given is along ``n`` to B and its
+    opposite to A, through the point (so it turns the bodies too); total momentum is
+    kept.  A soft visit (Box2D v3's soft constraint) goes only the fraction
+    ``mass_scale`` of the way to the target and also gives back the fraction
+    ``impulse_scale`` of the total so far, before the clamp.
 
     Parameters
     ----------
@@ -78,8 +73,8 @@ def apply_normal_impulse(velocity_a, velocity_b, point: ContactPoint, normal_tot
     normal_total : float
         The accumulated normal impulse of this point so far in this step (N s).
     target : float
-        The wanted separating normal velocity (m/s): 0 to stop, ``-e v_n0`` for
-        restitution, a bias to push an overlap apart.
+        The wanted separating normal velocity (m/s): 0 to stop, a bounce, or a push
+        out of an overlap (:func:`~solutions.solver.contact_sweeps.contact_target`).
     mass_scale, impulse_scale : float
         Soft-constraint scales (dimensionless); 1 and 0 for a rigid contact.
 
@@ -103,6 +98,19 @@ def apply_normal_impulse(velocity_a, velocity_b, point: ContactPoint, normal_tot
 
     >>> apply_normal_impulse((0.0, 0.0, 0.0), (0.0, 3.0, 0.0), point, 2.0)
     ((0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.0)
+
+    A joint row (``lower = -inf``) may pull: it takes the 3 N s back and stops the disc.
+
+    >>> apply_normal_impulse((0.0, 0.0, 0.0), (0.0, 3.0, 0.0), point._replace(lower=-math.inf), 2.0)
+    ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), -1.0)
+
+    Hit off its centre (lever arm 0.5 m across the normal: ``rn_b = -0.5``), the disc
+    also turns, and less impulse stops the point (``mass_normal = 1 / (1 + 2 * 0.25)``):
+
+    >>> off = ContactPoint(0.0, 1.0, 0.0, -0.5, 0.0, 0.5, 0.0, 1.0, 0.0, 2.0, 1 / 1.5, 1 / 1.5, 0.3)
+    >>> _, velocity_b, total = apply_normal_impulse((0.0, 0.0, 0.0), (0.0, -2.0, 0.0), off, 0.0)
+    >>> [round(x, 12) for x in velocity_b], round(total, 12)
+    ([0.0, -0.666666666667, -1.333333333333], 1.333333333333)
     """
     ### BEGIN SOLUTION
     vxa, vya, wa = velocity_a
@@ -121,13 +129,12 @@ def apply_normal_impulse(velocity_a, velocity_b, point: ContactPoint, normal_tot
 def apply_friction_impulse(velocity_a, velocity_b, point: ContactPoint, normal_total: float, tangent_total: float):
     """One visit of a contact point's friction row, with accumulated clamping.
 
-    The tangent velocity of B's material point relative to A's, along ``t = (n_y,
-    -n_x)``, is ``v_t = (vx_B - vx_A) n_y - (vy_B - vy_A) n_x + w_B rt_B - w_A rt_A``.
-    The change that would stop the sliding is ``dT = -m_t v_t``; the accumulated
-    friction impulse becomes ``T + dT`` clamped to ``[-mu P, mu P]`` (Coulomb, with
-    ``P`` the accumulated normal impulse so far), and only the clamped change is
-    applied: ``+change t`` to B, ``-change t`` to A, with ``w_B += iib rt_B change``
-    and ``w_A -= iia rt_A change``.
+    Contract: the visit stops the sliding of B's material point relative to A's along
+    the tangent ``t = (n_y, -n_x)`` (m/s), unless that would take the accumulated
+    friction impulse out of the Coulomb bound, ``mu`` times the accumulated normal
+    impulse ``normal_total``, either way: then the total stops at the bound and the
+    point keeps sliding, slower.  The impulse is along ``t`` to B and its opposite to
+    A, through the point; total momentum is kept.
 
     Parameters
     ----------
@@ -154,6 +161,14 @@ def apply_friction_impulse(velocity_a, velocity_b, point: ContactPoint, normal_t
     >>> point = ContactPoint(0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.5)
     >>> apply_friction_impulse((0.0, 0.0, 0.0), (3.0, 0.0, 0.0), point, 2.0, 0.0)
     ((0.0, 0.0, 0.0), (2.0, 0.0, 0.0), -1.0)
+
+    Pressed by 10 N s, the bound is 5 N s: 3 N s stop it.  A later visit that finds it
+    sliding back at 1 m/s may take back 1 N s of them.
+
+    >>> apply_friction_impulse((0.0, 0.0, 0.0), (3.0, 0.0, 0.0), point, 10.0, 0.0)
+    ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), -3.0)
+    >>> apply_friction_impulse((0.0, 0.0, 0.0), (-1.0, 0.0, 0.0), point, 10.0, -3.0)
+    ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), -2.0)
     """
     ### BEGIN SOLUTION
     vxa, vya, wa = velocity_a

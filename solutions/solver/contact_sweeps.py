@@ -96,8 +96,8 @@ def prestep_point(point, normal, centre_a, centre_b, ima: float, imb: float, iia
     rbx, rby = px - centre_b[0], py - centre_b[1]
     rn_a, rn_b = rax * ny - ray * nx, rbx * ny - rby * nx          # r x n
     rt_a, rt_b = -(rax * nx + ray * ny), -(rbx * nx + rby * ny)     # r x t, t = (ny, -nx)
-    k_normal = ima + imb + iia * rn_a * rn_a + iib * rn_b * rn_b
-    k_tangent = ima + imb + iia * rt_a * rt_a + iib * rt_b * rt_b
+    k_normal = ima + imb + iia * (rn_a * rn_a) + iib * (rn_b * rn_b)
+    k_tangent = ima + imb + iia * (rt_a * rt_a) + iib * (rt_b * rt_b)
     return ContactPoint(nx, ny, rn_a, rn_b, rt_a, rt_b, ima, imb, iia, iib,
                         1.0 / k_normal if k_normal > 0.0 else 0.0, 1.0 / k_tangent if k_tangent > 0.0 else 0.0,
                         friction, 0.0)

@@ -280,8 +280,11 @@ def test_structure(student):
 @pytest.mark.title("Dynamic tree: best_sibling picks a node of least cost")
 def test_best_sibling(student):
     rng = np.random.default_rng(304)
-    cases = [(np.array([[0, 0, 1, 1], [1, 0, 2, 1], [10, 0, 11, 1]], dtype=float), [10.5, 0.5, 11.5, 1.0], 0.0),
-             (np.array([[0, 0, 1, 1], [1, 0, 2, 1], [10, 0, 11, 1]], dtype=float), [-50, -50, 50, 50], 0.0)]
+    three = np.array([[0, 0, 1, 1], [1, 0, 2, 1], [10, 0, 11, 1]], dtype=float)   # root: (bodies 0, 1), body 2
+    cases = [(three, [10.5, 0.5, 11.5, 1.0], 0.0), (three, [-50, -50, 50, 50], 0.0),
+             # Near ties with the root (24 m): body 2 adds 23.4 m, less than the root by 0.6 m; then the
+             # root adds 24.4 m, less by 0.4 m than the pair of bodies 0 and 1 (24.4 m + the root's 0.4 m).
+             (three, [0.3, 0.0, 11.0, 1.0], 0.0), (three, [-0.2, 0.0, 11.0, 1.0], 0.0)]
     for _ in range(12):
         boxes = random_aabbs(rng, int(rng.integers(5, 60)), world=20.0)
         centre = rng.uniform(-12, 12, 2)

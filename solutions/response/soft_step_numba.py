@@ -87,6 +87,8 @@ from ..narrowphase.circle_pairs_numba import CIRCLE_FEATURE, circle_manifolds
 from .contact_preparation_numba import recall_impulses, separations
 from ..solver.sweep_order_numba import sweep_order
 from ..joints_numba import joint_rows, solve_joints
+from ..body_state_numba import integrate_positions, integrate_velocities
+
 
 
 
@@ -145,6 +147,81 @@ def _zero_static_velocities(velocity, static_members):
         velocity[i, 2] *= 0.0
 
 
+@njit(cache=True, inline="always")
+def warm_start(velocity, a, b, nx, ny, ima, imb, iia, iib, rax, ray, rbx, rby, normal, tangent, sweep_position):
+    """The accumulated impulses (``normal`` and ``tangent``, sweep order) applied again,
+    points in manifold order, to all bodies A, then all bodies B (``SoftStepSolver.solve_substep``'s
+    ``apply_impulses``)."""
+    for k in range(a.shape[0]):
+        pn, pt = normal[sweep_position[k]], tangent[sweep_position[k]]
+        ix, iy = pn * nx[k] + pt * ny[k], pn * ny[k] + pt * (-nx[k])
+        velocity[a[k], 0] += -(ima[k] * ix)
+        velocity[a[k], 1] += -(ima[k] * iy)
+        velocity[a[k], 2] += -(iia[k] * (rax[k] * iy - ray[k] * ix))
+    for k in range(a.shape[0]):
+        pn, pt = normal[sweep_position[k]], tangent[sweep_position[k]]
+        ix, iy = pn * nx[k] + pt * ny[k], pn * ny[k] + pt * (-nx[k])
+        velocity[b[k], 0] += imb[k] * ix
+        velocity[b[k], 1] += imb[k] * iy
+        velocity[b[k], 2] += iib[k] * (rbx[k] * iy - rby[k] * ix)
+
+
+@njit(cache=True, inline="always")
+def solve_contacts(use_bias, separation_is_current, velocity, position, angle, h, max_push, iterations, contacts,
+                   blocks, soft_rows, static_members):
+    """``SoftStepSolver.solve_substep`` after its warm start: one pass of ``iterations``
+    sweeps of the kernel, soft and pushing apart (``use_bias``, before the positions
+    move) or rigid without a push (relax, after them); a point still open may close by
+    its separation over ``h`` (s).  ``separation_is_current``: the separations in
+    ``contacts`` are those of the current poses (made again otherwise).  Returns
+    whether they are current after this pass (the positions move after a biased one)."""
+    (a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, rn_a, rn_b, depth, cos_less_1, sin, separation,
+     order) = contacts
+    groups, group_floats, rows, solution = blocks
+    bias_rate, soft_mass_scale, soft_impulse_scale, max_normal = soft_rows
+    target, mass_scale = solution[SOLUTION_TARGET], solution[SOLUTION_MASS_SCALE]
+    impulse_scale, normal = solution[SOLUTION_IMPULSE_SCALE], solution[SOLUTION_NORMAL]
+    if not (use_bias and separation_is_current):
+        separations(position, angle, a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, rn_a, rn_b, depth,
+                    cos_less_1, sin, separation)
+    for r in range(order.shape[0]):
+        s = separation[order[r]]
+        if s > 0.0:
+            target[r], mass_scale[r], impulse_scale[r] = -s / h, 1.0, 0.0
+        elif use_bias:
+            target[r] = min(-bias_rate[r] * s, max_push)
+            mass_scale[r], impulse_scale[r] = soft_mass_scale[r], soft_impulse_scale[r]
+        else:
+            target[r], mass_scale[r], impulse_scale[r] = 0.0, 1.0, 0.0
+    sweep_groups(velocity, groups, group_floats, rows, solution, iterations, True, False, True, True)
+    if use_bias:
+        for r in range(order.shape[0]):
+            max_normal[r] = max(max_normal[r], normal[r])
+    _zero_static_velocities(velocity, static_members)
+    return not use_bias
+
+
+@njit(cache=True, inline="always")
+def apply_restitution(velocity, order, normal_velocity, restitution, threshold, max_normal, blocks, static_members):
+    """``SoftStepSolver.end_step``'s restitution: one sweep without friction over the
+    points that pushed in some sub-step (``max_normal`` > 0) and closed faster than
+    ``threshold`` (m/s) at the start of the step, aiming at ``restitution`` times that speed."""
+    groups, group_floats, rows, solution = blocks
+    target, mass_scale, impulse_scale = (solution[SOLUTION_TARGET], solution[SOLUTION_MASS_SCALE],
+                                         solution[SOLUTION_IMPULSE_SCALE])
+    bouncing = False
+    for r in range(order.shape[0]):
+        k = order[r]
+        bounce = normal_velocity[k] < -threshold and max_normal[r] > 0.0 and restitution[k] > 0.0
+        target[r] = -restitution[k] * normal_velocity[k]
+        mass_scale[r] = 1.0 if bounce else 0.0
+        bouncing = bouncing or bounce
+    if bouncing:
+        impulse_scale[:] = 0.0
+        sweep_groups(velocity, groups, group_floats, rows, solution, 1, True, False, False, False)
+        _zero_static_velocities(velocity, static_members)
+
+
 @njit(cache=True)
 def _soft_step(position, angle, velocity, properties, ints, floats):
     """One soft step of the world (module docstring) on its state (``position``,
@@ -198,7 +275,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     joint_softness = parameters[PARAMETER_JOINT_SOFTNESS:PARAMETER_JOINT_SOFTNESS + 3]
     substeps, iterations = switches[SWITCH_SUBSTEPS], switches[SWITCH_ITERATIONS]
     relax, use_friction = switches[SWITCH_RELAX] != 0, switches[SWITCH_FRICTION] != 0
-    warm_start, block_solver = switches[SWITCH_WARM_START] != 0, switches[SWITCH_BLOCK_SOLVER] != 0
+    warm_start_on, block_solver = switches[SWITCH_WARM_START] != 0, switches[SWITCH_BLOCK_SOLVER] != 0
     colours, circles = switches[SWITCH_COLOURS] != 0, switches[SWITCH_CIRCLES] != 0
     rotation = switches[SWITCH_ROTATION] != 0
     corner_rounding, incident_rounding = switches[SWITCH_CORNER_ROUNDING], switches[SWITCH_INCIDENT_ROUNDING]
@@ -331,7 +408,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     normal_total, tangent_total = column[25], column[26]
     normal_total[:] = 0.0
     tangent_total[:] = 0.0
-    if warm_start:
+    if warm_start_on:
         recall_work, _ = take(work_ints, ii, p_count + old_key.shape[0])
         recall_impulses(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_normal, old_tangent,
                 man_first, man_count, match_distance, normal_total, tangent_total, recall_work)
@@ -339,7 +416,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
             normal_total[k] *= dt_ratio
             tangent_total[k] *= dt_ratio if use_friction else 0.0
     warm_started = 0
-    if warm_start:
+    if warm_start_on:
         for k in range(p_count):
             if normal_total[k] != 0.0:
                 warm_started += 1
@@ -395,8 +472,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal = rows[0], rows[1], rows[2], rows[3], rows[4]
     s_mass_tangent, s_mu = rows[5], rows[6]
     solution = block[8 * p_count:14 * p_count].reshape((6, p_count))  # SOLUTION_*: impulses, targets, scales, work
-    normal_s, tangent_s, target = solution[SOLUTION_NORMAL], solution[SOLUTION_TANGENT], solution[SOLUTION_TARGET]
-    mass_scale, impulse_scale = solution[SOLUTION_MASS_SCALE], solution[SOLUTION_IMPULSE_SCALE]
+    normal_s, tangent_s = solution[SOLUTION_NORMAL], solution[SOLUTION_TANGENT]
     row_extra = block[14 * p_count:].reshape((5, p_count))
     bias_rate, mass_scale_soft, impulse_scale_soft = row_extra[0], row_extra[1], row_extra[2]
     max_normal, separation = row_extra[3], row_extra[4]
@@ -429,74 +505,34 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     joint_values, fi = take(work_floats, fi, 25 * joint_count)
     joint_work = joint_rows(joint_block.reshape((6, joint_count)), joint_values.reshape((25, joint_count)))
     joint_rows_made = -1     # joint rows made at the current poses (-1: none yet)
+    contacts = (a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, rn_a, rn_b, depth, body_cos_less_1, body_sin,
+                separation, order)
+    blocks = (groups, group_floats, rows, solution)
+    soft_rows = (bias_rate, mass_scale_soft, impulse_scale_soft, max_normal)
+    # The stages of World.step, in its order (each inlined).
     for _ in range(substeps):
-        for i in range(n):
-            if inverse_mass[i] != 0.0:      # dynamic
-                velocity[i, 0] += h * gravity_x
-                velocity[i, 1] += h * gravity_y
-        for biased in (True, False):
-            if p_count and (biased or relax):
-                if biased:      # warm start: the accumulated impulses (manifold order), A then B
-                    for k in range(p_count):
-                        pn, pt = normal_s[sweep_position[k]], tangent_s[sweep_position[k]]
-                        ix, iy = pn * nx[k] + pt * ny[k], pn * ny[k] + pt * (-nx[k])
-                        velocity[a[k], 0] += -(ima[k] * ix)
-                        velocity[a[k], 1] += -(ima[k] * iy)
-                        velocity[a[k], 2] += -(iia[k] * (rax[k] * iy - ray[k] * ix))
-                    for k in range(p_count):
-                        pn, pt = normal_s[sweep_position[k]], tangent_s[sweep_position[k]]
-                        ix, iy = pn * nx[k] + pt * ny[k], pn * ny[k] + pt * (-nx[k])
-                        velocity[b[k], 0] += imb[k] * ix
-                        velocity[b[k], 1] += imb[k] * iy
-                        velocity[b[k], 2] += iib[k] * (rbx[k] * iy - rby[k] * ix)
-                if not (biased and separation_is_current):
-                    separations(position, angle, a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, rn_a,
-                                 rn_b, depth, body_cos_less_1, body_sin, separation)
-                separation_is_current = not biased      # positions move after a biased pass
-                for r in range(p_count):
-                    s = separation[order[r]]
-                    if s > 0.0:
-                        target[r], mass_scale[r], impulse_scale[r] = -s / h, 1.0, 0.0
-                    elif biased:
-                        target[r] = min(-bias_rate[r] * s, max_push)
-                        mass_scale[r], impulse_scale[r] = mass_scale_soft[r], impulse_scale_soft[r]
-                    else:
-                        target[r], mass_scale[r], impulse_scale[r] = 0.0, 1.0, 0.0
-                sweep_groups(velocity, groups, group_floats, rows, solution, iterations, True, False, True, True)
-                if biased:
-                    for r in range(p_count):
-                        max_normal[r] = max(max_normal[r], normal_s[r])
-                _zero_static_velocities(velocity, static_members)
-            if biased and joint_a.shape[0]:     # the joints: soft rods after the contacts
-                solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, joint_impulses, inverse_mass,
-                              inverse_inertia, h, iterations, True, joint_softness, warm_start, joint_work,
-                              joint_rows_made)
-                joint_rows_made = -1                 # the positions move next
-            if biased:      # positions between the two passes
-                for i in range(n):
-                    if inverse_mass[i] != 0.0:      # dynamic
-                        position[i, 0] += h * velocity[i, 0]
-                        position[i, 1] += h * velocity[i, 1]
-                    if inverse_inertia[i] != 0.0:       # turning
-                        angle[i] += h * velocity[i, 2]
-                if relax and joint_a.shape[0]:
-                    joint_rows_made = solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats,
-                                               joint_impulses, inverse_mass, inverse_inertia, h, iterations, False,
-                                               joint_softness, warm_start, joint_work, -1)
-
-    # 5. Restitution (SoftStepSolver.end_step).
+        integrate_velocities(velocity, inverse_mass, h, gravity_x, gravity_y)
+        if p_count:
+            warm_start(velocity, a, b, nx, ny, ima, imb, iia, iib, rax, ray, rbx, rby, normal_s, tangent_s,
+                       sweep_position)
+            separation_is_current = solve_contacts(True, separation_is_current, velocity, position, angle, h, max_push,
+                                                   iterations, contacts, blocks, soft_rows, static_members)
+        if joint_count:     # the joints: soft rods after the contacts
+            solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, joint_impulses, inverse_mass,
+                         inverse_inertia, h, iterations, True, joint_softness, warm_start_on, joint_work,
+                         joint_rows_made)
+        integrate_positions(position, angle, velocity, inverse_mass, inverse_inertia, h)
+        joint_rows_made = -1
+        if relax and joint_count:
+            joint_rows_made = solve_joints(velocity, position, angle, joint_a, joint_b, joint_floats, joint_impulses,
+                                           inverse_mass, inverse_inertia, h, iterations, False, joint_softness,
+                                           warm_start_on, joint_work, -1)
+        if p_count and relax:
+            separation_is_current = solve_contacts(False, separation_is_current, velocity, position, angle, h,
+                                                   max_push, iterations, contacts, blocks, soft_rows, static_members)
     if p_count:
-        bouncing = False
-        for r in range(p_count):
-            k = order[r]
-            bounce = normal_velocity[k] < -restitution_threshold and max_normal[r] > 0.0 and restitution[k] > 0.0
-            target[r] = -restitution[k] * normal_velocity[k]
-            mass_scale[r] = 1.0 if bounce else 0.0
-            bouncing = bouncing or bounce
-        if bouncing:
-            impulse_scale[:] = 0.0
-            sweep_groups(velocity, groups, group_floats, rows, solution, 1, True, False, False, False)
-            _zero_static_velocities(velocity, static_members)
+        apply_restitution(velocity, order, normal_velocity, restitution, restitution_threshold, max_normal, blocks,
+                          static_members)
     for r in range(p_count):
         normal_total[order[r]], tangent_total[order[r]] = normal_s[r], tangent_s[r]
     block_count = 0

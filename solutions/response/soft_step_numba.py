@@ -222,6 +222,23 @@ def apply_restitution(velocity, order, normal_velocity, restitution, threshold, 
         _zero_static_velocities(velocity, static_members)
 
 
+@njit(cache=True, inline="always")
+def store_impulses(order, normal, tangent, normal_total, tangent_total, pair_key, feature, a, b, px, py, nx, ny,
+                   separation, kept_ints, kept_floats):
+    """``SoftStepSolver.end_step``'s memory: the accumulated impulses (sweep order) back
+    in manifold order, and every point (``POINT_*`` columns) into ``kept_ints`` and
+    ``kept_floats``, for the caller and as the next step's warm start."""
+    for r in range(order.shape[0]):
+        normal_total[order[r]], tangent_total[order[r]] = normal[r], tangent[r]
+    for k in range(order.shape[0]):
+        kept_ints[k, POINT_PAIR], kept_ints[k, POINT_FEATURE] = pair_key[k], feature[k]
+        kept_ints[k, POINT_A], kept_ints[k, POINT_B] = a[k], b[k]
+        kept_floats[k, POINT_X], kept_floats[k, POINT_Y] = px[k], py[k]
+        kept_floats[k, POINT_NX], kept_floats[k, POINT_NY] = nx[k], ny[k]
+        kept_floats[k, POINT_SEPARATION] = separation[k]
+        kept_floats[k, POINT_NORMAL_IMPULSE], kept_floats[k, POINT_TANGENT_IMPULSE] = normal_total[k], tangent_total[k]
+
+
 @njit(cache=True)
 def _soft_step(position, angle, velocity, properties, ints, floats):
     """One soft step of the world (module docstring) on its state (``position``,
@@ -533,21 +550,12 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     if p_count:
         apply_restitution(velocity, order, normal_velocity, restitution, restitution_threshold, max_normal, blocks,
                           static_members)
-    for r in range(p_count):
-        normal_total[order[r]], tangent_total[order[r]] = normal_s[r], tangent_s[r]
+    store_impulses(order, normal_s, tangent_s, normal_total, tangent_total, pair_key, feature, a, b, px, py, nx, ny,
+                   sep, memory_ints[1 - last], memory_floats[1 - last])
     block_count = 0
     for q in range(g_count):
         if solved_as_block[q] != 0:
             block_count += 1
-    # The points, for the caller and as the next step's warm-start memory.
-    kept_ints, kept_floats = memory_ints[1 - last], memory_floats[1 - last]
-    for k in range(p_count):
-        kept_ints[k, POINT_PAIR], kept_ints[k, POINT_FEATURE] = pair_key[k], feature[k]
-        kept_ints[k, POINT_A], kept_ints[k, POINT_B] = a[k], b[k]
-        kept_floats[k, POINT_X], kept_floats[k, POINT_Y] = px[k], py[k]
-        kept_floats[k, POINT_NX], kept_floats[k, POINT_NY] = nx[k], ny[k]
-        kept_floats[k, POINT_SEPARATION] = sep[k]
-        kept_floats[k, POINT_NORMAL_IMPULSE], kept_floats[k, POINT_TANGENT_IMPULSE] = normal_total[k], tangent_total[k]
     figures[FIGURE_MEMORY], figures[FIGURE_POINTS] = 1 - last, p_count
     figures[FIGURE_CANDIDATE_PAIRS], figures[FIGURE_MANIFOLDS] = m, g_count
     figures[FIGURE_WARM_STARTED], figures[FIGURE_BLOCK_MANIFOLDS] = warm_started, block_count

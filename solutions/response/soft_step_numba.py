@@ -17,7 +17,8 @@ operations, as one compiled function over the world's
    (:mod:`solutions.narrowphase.box_pairs_numba`, itself the twin of the numpy batch);
 3. the prestep of :class:`~solutions.response.contact_preparation.ContactPreparation`
    (lever arms, effective masses, the restitution target, last step's impulses matched
-   by feature id or else by the nearest point, the sweep order and the 2x2 blocks);
+   by feature id or else by the nearest point, the sweep order and the 2x2 blocks), as
+   :func:`~solutions.response.contact_preparation_numba.prepare`;
 4. the sub-steps of :class:`~solutions.response.soft_step.SoftStepSolver` (gravity,
    warm start, soft solve, positions, relax), each pass the compiled solver kernel
    (:func:`solutions.solver.kernel_numba.sweep_groups`, copied in);
@@ -53,13 +54,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..body_state import EXTENT_X, EXTENT_Y, FRICTION, INVERSE_INERTIA, INVERSE_MASS, RESTITUTION
+from ..body_state import EXTENT_X, EXTENT_Y, INVERSE_INERTIA, INVERSE_MASS
 from ..contact import Contact
 from ..narrowphase.box_pairs_numba import (CLIPPING_FLOATS, CLIPPING_INTS, MANIFOLD_COUNT, MANIFOLD_FLOATS,
-                                           MANIFOLD_FOUND, MANIFOLD_INCIDENT_FACE, MANIFOLD_INTS, MANIFOLD_NX,
-                                           MANIFOLD_NY, MANIFOLD_POINT, MANIFOLD_REFERENCE_FACE,
-                                           MANIFOLD_REFERENCE_IS_B, MANIFOLD_SEPARATION, MANIFOLD_VERTEX,
-                                           indexed_manifolds, matmul_rounding)
+                                           MANIFOLD_INCIDENT_FACE, MANIFOLD_INTS, MANIFOLD_REFERENCE_FACE,
+                                           MANIFOLD_REFERENCE_IS_B, MANIFOLD_VERTEX, indexed_manifolds,
+                                           matmul_rounding)
 from ..broadphase.pairs_numba import STRIP_GRID_MIN_BODIES, candidate_pairs, faces_and_aabbs, few_candidate_pairs
 from .soft_step_layout import (FIGURE_BLOCK_MANIFOLDS, FIGURE_CANDIDATE_PAIRS, FIGURE_MANIFOLDS, FIGURE_MEMORY,
                                FIGURE_POINTS, FIGURE_WARM_STARTED, HEADER_CAPACITY, HEADER_COUNT, HEADER_JOINTS,
@@ -68,74 +68,22 @@ from .soft_step_layout import (FIGURE_BLOCK_MANIFOLDS, FIGURE_CANDIDATE_PAIRS, F
                                PARAMETER_MATCH_DISTANCE, PARAMETER_MAX_PUSH, PARAMETER_RESTITUTION_THRESHOLD,
                                PARAMETER_SOFT, PARAMETER_STIFF, POINT_A, POINT_B, POINT_FEATURE,
                                POINT_NORMAL_IMPULSE, POINT_NX, POINT_NY, POINT_PAIR, POINT_SEPARATION,
-                               POINT_TANGENT_IMPULSE, POINT_X, POINT_Y, SWITCH_BLOCK_SOLVER, SWITCH_CIRCLES,
-                               SWITCH_COLOURS, SWITCH_CORNER_ROUNDING, SWITCH_FRICTION, SWITCH_INCIDENT_ROUNDING,
-                               SWITCH_ITERATIONS, SWITCH_RELAX, SWITCH_ROTATION, SWITCH_SUBSTEPS, SWITCH_WARM_START,
-                               layout, sections, take)
+                               POINT_TANGENT_IMPULSE, POINT_X, POINT_Y, SWITCH_CIRCLES, SWITCH_CORNER_ROUNDING,
+                               SWITCH_INCIDENT_ROUNDING, SWITCH_ITERATIONS, SWITCH_RELAX, SWITCH_SUBSTEPS,
+                               SWITCH_WARM_START, layout, sections, take)
 from ..narrowphase.speculative import SPECULATIVE_MARGIN
 from ..joints import DistanceJoint
 from ..shapes import OBB, Circle
-from ..solver.constraint_rows import MAX_CONDITION_NUMBER
-from ..solver.kernel_numba import (GROUP_A, GROUP_B, GROUP_BLOCK, GROUP_COUNT, GROUP_FIRST, SOLUTION_IMPULSE_SCALE,
-                                   SOLUTION_MASS_SCALE, SOLUTION_NORMAL, SOLUTION_TANGENT, SOLUTION_TARGET,
-                                   sweep_groups)
+from ..solver.kernel_numba import (GROUP_BLOCK, SOLUTION_IMPULSE_SCALE, SOLUTION_MASS_SCALE, SOLUTION_NORMAL,
+                                   SOLUTION_TANGENT, SOLUTION_TARGET, sweep_groups)
 from .soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, soft_coefficients
 from .solver_settings import SolverStats
 from ..compiled_cache import forget_stale_machine_code
 from ..no_alias_compiler import NoAliasCompiler
 from ..narrowphase.circle_pairs_numba import CIRCLE_FEATURE, circle_manifolds
-from .contact_preparation_numba import recall_impulses, separations
-from ..solver.sweep_order_numba import sweep_order
+from .contact_preparation_numba import prepare, separations
 from ..joints_numba import joint_rows, solve_joints
 from ..body_state_numba import integrate_positions, integrate_velocities
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
 
 
 @njit(cache=True, inline="always")
@@ -268,8 +216,6 @@ def _soft_step(position, angle, velocity, properties, ints, floats):
     return _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, ints, floats)
 
 
-
-
 #: Compiled without numba's reference counts (``_nrt=False``): each array view a
 #: function makes (a row of a block) otherwise costs an atomic increment and decrement
 #: of its parent's count, and on a three-box world those were two thirds of the step
@@ -285,16 +231,14 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     (:func:`few_candidate_pairs`)."""
     (switches, figures, joint_ints, memory_ints, work_ints, parameters, joint_floats, joint_impulses,
      memory_floats, work_floats) = sections(angle.shape[0], ints, floats)
-    dt_ratio, h = parameters[PARAMETER_DT_RATIO], parameters[PARAMETER_H]
+    h = parameters[PARAMETER_H]
     gravity_x, gravity_y = parameters[PARAMETER_GRAVITY_X], parameters[PARAMETER_GRAVITY_Y]
     max_push, restitution_threshold = parameters[PARAMETER_MAX_PUSH], parameters[PARAMETER_RESTITUTION_THRESHOLD]
-    match_distance, margin = parameters[PARAMETER_MATCH_DISTANCE], parameters[PARAMETER_MARGIN]
+    margin = parameters[PARAMETER_MARGIN]
     joint_softness = parameters[PARAMETER_JOINT_SOFTNESS:PARAMETER_JOINT_SOFTNESS + 3]
     substeps, iterations = switches[SWITCH_SUBSTEPS], switches[SWITCH_ITERATIONS]
-    relax, use_friction = switches[SWITCH_RELAX] != 0, switches[SWITCH_FRICTION] != 0
-    warm_start_on, block_solver = switches[SWITCH_WARM_START] != 0, switches[SWITCH_BLOCK_SOLVER] != 0
-    colours, circles = switches[SWITCH_COLOURS] != 0, switches[SWITCH_CIRCLES] != 0
-    rotation = switches[SWITCH_ROTATION] != 0
+    relax, circles = switches[SWITCH_RELAX] != 0, switches[SWITCH_CIRCLES] != 0
+    warm_start_on = switches[SWITCH_WARM_START] != 0
     corner_rounding, incident_rounding = switches[SWITCH_CORNER_ROUNDING], switches[SWITCH_INCIDENT_ROUNDING]
     joint_a, joint_b, jointed = joint_ints[JOINT_A], joint_ints[JOINT_B], joint_ints[JOINT_PAIRS]
     last = figures[FIGURE_MEMORY]
@@ -302,10 +246,6 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     n = angle.shape[0]
     half = properties[:, EXTENT_X:EXTENT_Y + 1]
     inverse_mass, inverse_inertia = properties[:, INVERSE_MASS], properties[:, INVERSE_INERTIA]
-    friction_of, restitution_of = properties[:, FRICTION], properties[:, RESTITUTION]
-    old_key, old_feature = old_ints[:, POINT_PAIR], old_ints[:, POINT_FEATURE]
-    old_x, old_y = old_floats[:, POINT_X], old_floats[:, POINT_Y]
-    old_normal, old_tangent = old_floats[:, POINT_NORMAL_IMPULSE], old_floats[:, POINT_TANGENT_IMPULSE]
     # Work space: blocks taken in turn from work_ints (at ``ii``) and work_floats (at
     # ``fi``), after the faces, the AABBs and the sweep's copy of them.
     fi = 24 * n
@@ -334,7 +274,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     manifold_ints = block.reshape((MANIFOLD_INTS, m))
     block, fi = take(work_floats, fi, MANIFOLD_FLOATS * m)
     manifold_floats = block.reshape((MANIFOLD_FLOATS, m))
-    found, count = manifold_ints[MANIFOLD_FOUND], manifold_ints[MANIFOLD_COUNT]
+    count = manifold_ints[MANIFOLD_COUNT]
     if circles:
         circle_manifolds(key_i, key_j, position, half, manifold_ints, manifold_floats)
     else:
@@ -349,183 +289,23 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
                 features[k, s] = ((ref_is_b[k] * 4 + ref_face[k]) * 4 + inc_face[k]) * 4 + manifold_ints[
                     MANIFOLD_VERTEX + s, k]
 
-    # The manifolds in pair order and their points in manifold order.
-    g_count = 0
-    p_count = 0
-    for k in range(m):
-        if found[k]:
-            g_count += 1
-            p_count += count[k]
-    # Each array below is a row of a block of the work space (allocations were half the
-    # cost of a step of a small world).
-    block, ii = take(work_ints, ii, 5 * g_count)
-    group_ints = block.reshape((5, g_count))
-    man_pair, man_count, man_first = group_ints[0], group_ints[1], group_ints[2]
-    block, ii = take(work_ints, ii, 6 * p_count)
-    point_ints = block.reshape((6, p_count))
-    a, b, feature, pair_key = point_ints[0], point_ints[1], point_ints[2], point_ints[3]
-    block, fi = take(work_floats, fi, 27 * p_count)
-    points_in_order = block.reshape((27, p_count))      # manifold order
-    nx, ny, px, py, sep = (points_in_order[0], points_in_order[1], points_in_order[2], points_in_order[3],
-                           points_in_order[4])
-    g = 0
-    p = 0
-    for k in range(m):
-        if not found[k]:
-            continue
-        man_pair[g], man_count[g], man_first[g] = keys[k], count[k], p
-        for s in range(count[k]):
-            a[p], b[p] = key_i[k], key_j[k]
-            nx[p], ny[p] = manifold_floats[MANIFOLD_NX, k], manifold_floats[MANIFOLD_NY, k]
-            px[p], py[p] = manifold_floats[MANIFOLD_POINT + 2 * s, k], manifold_floats[MANIFOLD_POINT + 2 * s + 1, k]
-            sep[p] = manifold_floats[MANIFOLD_SEPARATION + s, k]
-            feature[p] = features[k, s]
-            pair_key[p] = keys[k]
-            p += 1
-        g += 1
-
     # 3. The prestep (ContactPreparation.prepare and SoftStepSolver.begin_step).
-    # Without rotation the contacts see no inertia and no angular velocity.
-    block, fi = take(work_floats, fi, 6 * n)
-    body_floats = block[:4 * n].reshape((4, n))
-    body_floats[:] = 0.0
-    contact_inertia = inverse_inertia if rotation else body_floats[0]
-    start_angle, body_cos_less_1, body_sin = body_floats[1], body_floats[2], body_floats[3]
-    for i in range(n):      # (loops, not slice copies: those may allocate, to guard against overlap)
-        start_angle[i] = angle[i]
-    centre = block[4 * n:].reshape((n, 2))
-    for i in range(n):
-        centre[i, 0], centre[i, 1] = position[i, 0], position[i, 1]
-    column = points_in_order
-    depth, rn_a, rn_b, rt_a, rt_b = column[5], column[6], column[7], column[8], column[9]
-    r_dot_n_a, r_dot_n_b, ima, imb, iia, iib = column[10], column[11], column[12], column[13], column[14], column[15]
-    mass_normal, mass_tangent, mu, restitution = column[16], column[17], column[18], column[19]
-    normal_velocity, rax, ray, rbx, rby = column[20], column[21], column[22], column[23], column[24]
-    for k in range(p_count):
-        i, j = a[k], b[k]
-        depth[k] = -sep[k]
-        restitution[k] = restitution_of[i] * restitution_of[j]
-        mu[k] = friction_of[i] * friction_of[j] if use_friction else 0.0
-        rax[k], ray[k] = px[k] - centre[i, 0], py[k] - centre[i, 1]
-        rbx[k], rby[k] = px[k] - centre[j, 0], py[k] - centre[j, 1]
-        rn_a[k] = rax[k] * ny[k] - ray[k] * nx[k]
-        rn_b[k] = rbx[k] * ny[k] - rby[k] * nx[k]
-        rt_a[k] = -(rax[k] * nx[k] + ray[k] * ny[k])
-        rt_b[k] = -(rbx[k] * nx[k] + rby[k] * ny[k])
-        r_dot_n_a[k] = rax[k] * nx[k] + ray[k] * ny[k]
-        r_dot_n_b[k] = rbx[k] * nx[k] + rby[k] * ny[k]
-        ima[k], imb[k], iia[k], iib[k] = inverse_mass[i], inverse_mass[j], contact_inertia[i], contact_inertia[j]
-        k_normal = ima[k] + imb[k] + iia[k] * (rn_a[k] * rn_a[k]) + iib[k] * (rn_b[k] * rn_b[k])
-        k_tangent = ima[k] + imb[k] + iia[k] * (rt_a[k] * rt_a[k]) + iib[k] * (rt_b[k] * rt_b[k])
-        mass_normal[k] = 1.0 / k_normal if k_normal > 0.0 else 0.0
-        mass_tangent[k] = 1.0 / k_tangent if k_tangent > 0.0 else 0.0
-        wi, wj = (velocity[i, 2], velocity[j, 2]) if rotation else (0.0, 0.0)
-        normal_velocity[k] = ((velocity[j, 0] - velocity[i, 0]) * nx[k] + (velocity[j, 1] - velocity[i, 1]) * ny[k]
-                              + wj * rn_b[k] - wi * rn_a[k])
-    normal_total, tangent_total = column[25], column[26]
-    normal_total[:] = 0.0
-    tangent_total[:] = 0.0
-    if warm_start_on:
-        recall_work, _ = take(work_ints, ii, p_count + old_key.shape[0])
-        recall_impulses(pair_key, feature, px, py, old_key, old_feature, old_x, old_y, old_normal, old_tangent,
-                man_first, man_count, match_distance, normal_total, tangent_total, recall_work)
-        for k in range(p_count):
-            normal_total[k] *= dt_ratio
-            tangent_total[k] *= dt_ratio if use_friction else 0.0
-    warm_started = 0
-    if warm_start_on:
-        for k in range(p_count):
-            if normal_total[k] != 0.0:
-                warm_started += 1
-
-    # The rows in sweep order (ContactPreparation._sweep_rows).
-    ii += p_count + old_key.shape[0]      # (the matching's work space)
-    block, ii = take(work_ints, ii, 2 * n)
-    body_flags = block.reshape((2, n))
-    body_flags[:] = 0
-    movable, in_contact = body_flags[0], body_flags[1]
-    for i in range(n):
-        movable[i] = inverse_mass[i] + contact_inertia[i] > 0.0
-    body_a, body_b = group_ints[3], group_ints[4]
-    for q in range(g_count):
-        body_a[q], body_b[q] = a[man_first[q]], b[man_first[q]]
-    block, ii = take(work_ints, ii, 2 * g_count + n + 2)
-    manifold_order, ii = take(work_ints, ii, g_count)
-    sweep_order(body_a, body_b, movable, colours, block, manifold_order)
-    order, sweep_position = point_ints[4], point_ints[5]
-    # The kernel's blocks (solutions.solver.kernel_numba): groups and rows in sweep order.
-    block, ii = take(work_ints, ii, 5 * g_count)
-    groups = block.reshape((5, g_count))
-    groups[:] = 0
-    g_a, g_b, first, row_count = groups[GROUP_A], groups[GROUP_B], groups[GROUP_FIRST], groups[GROUP_COUNT]
-    solved_as_block = groups[GROUP_BLOCK]
-    r = 0
-    for q in range(g_count):
-        src = manifold_order[q]
-        first[q], row_count[q] = r, man_count[src]
-        for s in range(man_count[src]):
-            order[r] = man_first[src] + s
-            r += 1
-    block, fi = take(work_floats, fi, 9 * g_count)
-    group_floats = block.reshape((9, g_count))
-    group_floats[:] = 0.0
-    g_nx, g_ny, g_ima, g_imb, g_iia = group_floats[0], group_floats[1], group_floats[2], group_floats[3], group_floats[4]
-    g_iib, k11, k12, k22 = group_floats[5], group_floats[6], group_floats[7], group_floats[8]
-    for q in range(g_count):
-        k1 = order[first[q]]
-        g_a[q], g_b[q], g_nx[q], g_ny[q] = a[k1], b[k1], nx[k1], ny[k1]
-        g_ima[q], g_imb[q], g_iia[q], g_iib[q] = ima[k1], imb[k1], iia[k1], iib[k1]
-        if row_count[q] == 2:
-            k2 = order[first[q] + 1]
-            c11 = ima[k1] + imb[k1] + iia[k1] * rn_a[k1] * rn_a[k1] + iib[k1] * rn_b[k1] * rn_b[k1]
-            c22 = ima[k1] + imb[k1] + iia[k1] * rn_a[k2] * rn_a[k2] + iib[k1] * rn_b[k2] * rn_b[k2]
-            c12 = ima[k1] + imb[k1] + iia[k1] * rn_a[k1] * rn_a[k2] + iib[k1] * rn_b[k1] * rn_b[k2]
-            if block_solver and max(c11, c22) ** 2 < MAX_CONDITION_NUMBER * (c11 * c22 - c12 * c12):
-                solved_as_block[q] = 1
-                k11[q], k12[q], k22[q] = c11, c12, c22
-    block, fi = take(work_floats, fi, 19 * p_count)
-    block[:] = 0.0
-    rows = block[:8 * p_count].reshape((8, p_count))    # ROW_*: rn_a, rn_b, rt_a, rt_b, masses, friction, lower bound
-    s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal = rows[0], rows[1], rows[2], rows[3], rows[4]
-    s_mass_tangent, s_mu = rows[5], rows[6]
-    solution = block[8 * p_count:14 * p_count].reshape((6, p_count))  # SOLUTION_*: impulses, targets, scales, work
-    normal_s, tangent_s = solution[SOLUTION_NORMAL], solution[SOLUTION_TANGENT]
-    row_extra = block[14 * p_count:].reshape((5, p_count))
-    bias_rate, mass_scale_soft, impulse_scale_soft = row_extra[0], row_extra[1], row_extra[2]
-    max_normal, separation = row_extra[3], row_extra[4]
-    for r in range(p_count):
-        k = order[r]
-        s_rn_a[r], s_rn_b[r], s_rt_a[r], s_rt_b[r] = rn_a[k], rn_b[k], rt_a[k], rt_b[k]
-        s_mass_normal[r], s_mass_tangent[r], s_mu[r] = mass_normal[k], mass_tangent[k], mu[k]
-        normal_s[r], tangent_s[r] = normal_total[k], tangent_total[k]
-        at = PARAMETER_STIFF if (ima[k] == 0.0 or imb[k] == 0.0) else PARAMETER_SOFT    # (not an array per row)
-        bias_rate[r], mass_scale_soft[r], impulse_scale_soft[r] = parameters[at], parameters[at + 1], parameters[at + 2]
-        sweep_position[k] = r                       # manifold order -> sweep order
-    for k in range(p_count):
-        in_contact[a[k]] = in_contact[b[k]] = True
-    static_count = 0
-    for i in range(n):
-        static_count += 1 if in_contact[i] and inverse_mass[i] == 0.0 else 0
-    static_members, ii = take(work_ints, ii, static_count)
-    static_count = 0
-    for i in range(n):
-        if in_contact[i] and inverse_mass[i] == 0.0:
-            static_members[static_count] = i
-            static_count += 1
+    points, contacts, blocks, soft_rows, static_members, warm_started, ii, fi = prepare(
+        keys, key_i, key_j, features, manifold_ints, manifold_floats, position, angle, velocity, properties,
+        parameters, switches, old_ints, old_floats, work_ints, ii, work_floats, fi)
+    (a, b, nx, ny, px, py, sep, pair_key, feature, ima, imb, iia, iib, rax, ray, rbx, rby, normal_velocity,
+     restitution, normal_total, tangent_total, order, sweep_position) = points
+    groups, group_floats, rows, solution = blocks
+    normal_s, tangent_s, max_normal = solution[SOLUTION_NORMAL], solution[SOLUTION_TANGENT], soft_rows[3]
+    p_count, g_count, solved_as_block = a.shape[0], groups.shape[1], groups[GROUP_BLOCK]
 
     # 4. The sub-steps.
-    for k in range(p_count):         # manifold order; the start's for the first biased pass
-        separation[k] = sep[k]
     separation_is_current = True     # (later: the relax pass's, or computed again without relax)
     joint_count = joint_a.shape[0]
     joint_block, ii = take(work_ints, ii, 6 * joint_count)
     joint_values, fi = take(work_floats, fi, 25 * joint_count)
     joint_work = joint_rows(joint_block.reshape((6, joint_count)), joint_values.reshape((25, joint_count)))
     joint_rows_made = -1     # joint rows made at the current poses (-1: none yet)
-    contacts = (a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, rn_a, rn_b, depth, body_cos_less_1, body_sin,
-                separation, order)
-    blocks = (groups, group_floats, rows, solution)
-    soft_rows = (bias_rate, mass_scale_soft, impulse_scale_soft, max_normal)
     # The stages of World.step, in its order (each inlined).
     for _ in range(substeps):
         integrate_velocities(velocity, inverse_mass, h, gravity_x, gravity_y)

@@ -16,6 +16,14 @@ Once an earlier cell of the same kernel session has fallen back like this, any e
 a later cell falls back too (it most likely needs a value the earlier cell did not
 compute).  Any other error is shown as usual: it is a bug to fix.
 
+A cell that uses what only the instructor's edition of the course holds (the
+instructor's benchmark scripts, a compiled engine) starts with a line such as::
+
+    %%reference_output 03b_dynamic_aabb_tree:cell-014 bench_dynamic_tree,sys.path
+
+Its code is there to read, but it never runs: it prints one line saying what it needs
+and shows the reference output stored with it, found as above.
+
 The ``check(...)`` cells carry no such line: they always run the public tests on your
 code.
 
@@ -41,6 +49,9 @@ METADATA_KEY = "reference_fallback"
 #: whose metadata holds ``{METADATA_KEY: NOTICE_MARK}``.
 NOTICE = "[reference output] this cell needs {needs}, which you have not written yet; {rest}"
 NOTICE_MARK = "notice"
+#: The line a ``%%reference_output`` cell shows first (``{needs}``: what it uses).
+SHOWN_ONLY_NOTICE = ("[reference output] this cell is not run here: it uses {needs}, which only the instructor's "
+                     "edition of the course has; {rest}")
 
 _HERE = os.path.abspath(__file__)
 _session: dict = {"missing": []}   # functions found missing in this kernel session, in order
@@ -264,19 +275,42 @@ def reference_fallback(line: str, cell: str):
             earlier = _session["missing"][-1]
             needs = (f"a result of an earlier cell, which needs {earlier} (here: "
                      f"{type(exc).__name__}: {str(exc)[:120]})")
-        if outputs:
-            rest = "the output below is the reference engine's."
-        elif outputs is None:
-            rest = why_none + "."
-        else:
-            rest = "it shows no output."
-        from IPython.display import clear_output, publish_display_data
+        from IPython.display import clear_output
 
         clear_output()   # what the cell printed before it stopped: the reference output replaces it
-        publish_display_data({"text/plain": NOTICE.format(needs=needs, rest=rest)},
-                             metadata={METADATA_KEY: NOTICE_MARK})
-        show_outputs(outputs or [])
+        _show_reference(NOTICE.format(needs=needs, rest=_what_follows(outputs, why_none)), outputs)
         return None
+
+
+def _what_follows(outputs: list[dict] | None, why_none: str) -> str:
+    """The end of a notice: what the stored outputs shown under it are."""
+    if outputs:
+        return "the output below is the reference engine's."
+    return why_none + "." if outputs is None else "it shows no output."
+
+
+def _show_reference(notice: str, outputs: list[dict] | None) -> None:
+    """The notice line (display data marked as the notice), then the stored outputs."""
+    from IPython.display import publish_display_data
+
+    publish_display_data({"text/plain": notice}, metadata={METADATA_KEY: NOTICE_MARK})
+    show_outputs(outputs or [])
+
+
+def _needs_text(needs: str) -> str:
+    names = [n for n in needs.split(",") if n]
+    words = [("a change of sys.path (files of the instructor's repository)" if n == "sys.path" else n) for n in names]
+    return " and ".join(words) or "what the student edition does not include"
+
+
+def reference_output(line: str, cell: str):
+    """``%%reference_output CHAPTER:CELL_ID [NEEDS]``: show the stored reference output
+    of a cell that uses what only the instructor has (``NEEDS``, comma-separated), with
+    a line saying so; the cell's code is not run."""
+    key, _, needs = line.strip().partition(" ")
+    outputs, why_none = stored_outputs(key)
+    _show_reference(SHOWN_ONLY_NOTICE.format(needs=_needs_text(needs.strip()), rest=_what_follows(outputs, why_none)),
+                    outputs)
 
 
 def glue(name: str, variable, display: bool = True) -> None:
@@ -289,12 +323,14 @@ def glue(name: str, variable, display: bool = True) -> None:
 
 
 def load_ipython_extension(ipython) -> None:
-    """``%load_ext grader.student.notebook``: register ``%%reference_fallback``."""
+    """``%load_ext grader.student.notebook``: register ``%%reference_fallback`` and ``%%reference_output``."""
     ipython.register_magic_function(reference_fallback, magic_kind="cell", magic_name="reference_fallback")
+    ipython.register_magic_function(reference_output, magic_kind="cell", magic_name="reference_output")
 
 
 def unload_ipython_extension(ipython) -> None:  # nothing to undo beyond the magic
-    ipython.magics_manager.magics["cell"].pop("reference_fallback", None)
+    for name in ("reference_fallback", "reference_output"):
+        ipython.magics_manager.magics["cell"].pop(name, None)
 
 
 # The kernel ------------------------------------------------------------------------------------

@@ -12,6 +12,12 @@ Each ``book/chapters/NN_name.ipynb`` (executed, outputs stored) becomes
   output stored with it in the notebook (the cell's metadata keeps their digest, by
   which the fallback knows them from the student's own) until the functions it needs
   are written;
+- a cell tagged ``reference-output-only`` (:data:`~grader.release.chapter_imports.REFERENCE_OUTPUT_TAG`:
+  it uses what only the instructor has, such as the ``bench/`` scripts) starts with
+  ``%%reference_output NN_name:CELL_ID NEEDS`` instead: it never runs, and shows the stored
+  output under a line saying why; an untagged cell that imports a module the student
+  edition neither ships nor installs, or that changes ``sys.path``, is refused
+  (:mod:`grader.release.chapter_imports`);
 - ``from myst_nb import glue`` imports :func:`grader.student.notebook.glue` instead, which shows
   nothing (the student edition needs neither myst-nb nor Sphinx), and the glued values,
   stored as outputs no viewer renders, are left out;
@@ -41,11 +47,13 @@ from pathlib import Path
 
 from ..student.notebook import METADATA_KEY, outputs_digest
 
+from .chapter_imports import REFERENCE_OUTPUT_TAG, ChapterGuard, StudentModules
 from .module_graph import imported_modules as imported_modules_of_python
 
 SOURCE_PACKAGE = "solutions"
 TARGET_PACKAGE = "exercises"
 MAGIC = "reference_fallback"
+SHOWN_ONLY_MAGIC = "reference_output"   # a cell tagged REFERENCE_OUTPUT_TAG: shown, never run
 READING_PAGES = ("intro", "conventions", "glossary")
 SETUP_CELL_ID = "student-edition-setup"
 #: myst-nb tags under which the built book hides a cell's source (a set-up cell of
@@ -111,9 +119,14 @@ def rewrite_prose(text: str) -> str:
 
 
 def cell_body(source: str) -> str:
-    """A cell's source without its ``%%reference_fallback`` line."""
+    """A cell's source without its ``%%reference_fallback`` (or ``%%reference_output``) line."""
     first, _, rest = source.partition("\n")
-    return rest if first.startswith(f"%%{MAGIC}") else source
+    return rest if first.split(" ")[0] in (f"%%{MAGIC}", f"%%{SHOWN_ONLY_MAGIC}") else source
+
+
+def is_shown_only(source: str) -> bool:
+    """True for a student notebook's cell that shows its stored output and never runs."""
+    return source.startswith(f"%%{SHOWN_ONLY_MAGIC} ")
 
 
 @functools.lru_cache(maxsize=4096)
@@ -505,13 +518,17 @@ def mark_glued_paragraphs(source: str) -> str:
                    if index % 2 == 0 and _GLUE_ROLE.search(part) else part for index, part in enumerate(parts))
 
 
-def student_notebook(nb, stem: str, converter: MystToMarkdown):
-    """The student edition of the executed chapter ``nb``."""
+def student_notebook(nb, stem: str, converter: MystToMarkdown, modules: StudentModules | None = None):
+    """The student edition of the executed chapter ``nb``; ``modules``: what a student's
+    kernel can import (by default the repository's ``exercises``, ``grader`` and ``tools``)."""
     import nbformat
     nb = copy.deepcopy(nb)
     cells = []
     figure_number = 0
     chapter_number = int(stem[:2]) if stem[:2].isdigit() else 0
+    repository = Path(__file__).resolve().parents[2]
+    modules = modules or StudentModules({name: repository / name for name in (TARGET_PACKAGE, "grader", "tools")})
+    guard = ChapterGuard(modules)
     for index, cell in enumerate(nb.cells):
         cell_id = cell.get("id") or f"cell-{index:03d}"
         cell["id"] = cell_id
@@ -526,7 +543,15 @@ def student_notebook(nb, stem: str, converter: MystToMarkdown):
         source = GLUE_IMPORT.sub(STUDENT_GLUE_IMPORT, rewrite_code(cell.source))
         check_code(source, where)
         cell.outputs = [_rewrite_output(o) for o in cell.get("outputs", []) if not _is_hidden_glue(o)]
-        if is_check_cell(source):
+        shown_only = REFERENCE_OUTPUT_TAG in cell.get("metadata", {}).get("tags", [])
+        if shown_only and (is_check_cell(source) or source.lstrip().startswith("%%")):
+            raise BookConversionError(f"{where}: a check cell or a cell magic cannot be {REFERENCE_OUTPUT_TAG} "
+                                      "(the student runs it)")
+        needs = guard.cell(where, python_of(source), shown_only)
+        if shown_only:
+            cell.metadata[METADATA_KEY] = {"digest": outputs_digest(cell.outputs)}
+            source = f"%%{SHOWN_ONLY_MAGIC} {stem}:{cell_id} {','.join(needs)}".rstrip() + f"\n{source}"
+        elif is_check_cell(source):
             cell.outputs = []
             cell.execution_count = None
         elif not source.lstrip().startswith("%%"):
@@ -566,8 +591,9 @@ def convert_page(text: str, stem: str, converter: MystToMarkdown) -> str:
     return out
 
 
-def write_book(chapters_dir: Path, pages_dir: Path, target: Path) -> dict:
-    """Write the student book into ``target``; return what was written
+def write_book(chapters_dir: Path, pages_dir: Path, target: Path, modules: StudentModules | None = None) -> dict:
+    """Write the student book into ``target`` (``modules``: what a student's kernel can
+    import, see :func:`student_notebook`); return what was written
     (``notebooks``: [(file, title)], ``pages``, ``tools_modules``: modules of ``tools``
     the chapters import)."""
     import nbformat
@@ -586,7 +612,7 @@ def write_book(chapters_dir: Path, pages_dir: Path, target: Path) -> dict:
     written = {"notebooks": [], "pages": [], "tools_modules": set()}
     for stem, nb in chapters:
         converter = MystToMarkdown(labels, f"{stem}.ipynb", contents, glued_values(nb))
-        student = student_notebook(nb, stem, converter)
+        student = student_notebook(nb, stem, converter, modules)
         with open(target / f"{stem}.ipynb", "w", encoding="utf-8") as handle:
             nbformat.write(student, handle)
         written["notebooks"].append((f"{stem}.ipynb", chapter_title(nb)))

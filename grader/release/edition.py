@@ -56,6 +56,7 @@ from pathlib import Path
 from .exercises import SOURCE_PACKAGE, TARGET_PACKAGE, GeneratorError
 from .exercises import check as check_generated
 from .exercises import generate as generate_exercises
+from .chapter_imports import ChapterImportError, StudentModules
 from .module_graph import files_reached, ignored, module_file
 from .module_graph import imported_modules as third_party_imports
 from .pins import installed_closure, normal_name, requirement_name
@@ -576,7 +577,8 @@ def exercises_out_of_date(repo_root: Path = REPO_ROOT) -> str | None:
 
 def write_student(target: Path, repo_root: Path = REPO_ROOT) -> dict:
     """Write the student edition into the empty folder ``target``; return what it holds."""
-    from .book import imported_modules, write_book  # deferred: nbformat, only when the student edition is written
+    # deferred: nbformat, only when the student edition is written
+    from .book import BookConversionError, imported_modules, is_shown_only, write_book
 
     repo_root = Path(repo_root)
     grader_dir = repo_root / "grader"
@@ -590,7 +592,12 @@ def write_student(target: Path, repo_root: Path = REPO_ROOT) -> dict:
         destination = target / "grader" / relative
         destination.parent.mkdir(parents=True, exist_ok=True)
         shutil.copy2(grader_dir / relative, destination)
-    book = write_book(repo_root / "book" / "chapters", repo_root / "book", target / "book")
+    kernel_modules = StudentModules({"exercises": target / "exercises", "grader": target / "grader",
+                                     "tools": repo_root / "tools"})   # tools: it ships what the chapters import
+    try:
+        book = write_book(repo_root / "book" / "chapters", repo_root / "book", target / "book", kernel_modules)
+    except (BookConversionError, ChapterImportError) as exc:
+        raise ReleaseError(f"a chapter cannot be made into a student notebook; nothing was written:\n  {exc}") from None
     tools = tools_files(book["tools_modules"], repo_root / "tools")
     if tools:
         (target / "tools").mkdir()
@@ -610,7 +617,7 @@ def write_student(target: Path, repo_root: Path = REPO_ROOT) -> dict:
         import nbformat
 
         for cell in nbformat.read(target / "book" / notebook, as_version=4).cells:
-            if cell.cell_type == "code":
+            if cell.cell_type == "code" and not is_shown_only(cell.source):   # a shown-only cell never runs
                 for module in imported_modules(cell.source):
                     modules.setdefault(module.split(".")[0], f"book/{notebook}")
     requirements = student_requirements(set(modules), repo_root / "pyproject.toml")

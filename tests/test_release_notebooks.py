@@ -15,6 +15,10 @@ One release is built for the module (about 6 s).  Then:
 - the cells the book hides (each chapter's set-up cell, figures' drawing code) open
   collapsed in JupyterLab;
 - Fig. 3.1 draws the student's grid once the grid exercise is written (marked ``book``);
+- chapter 03b runs to its end on a package filled with the reference (marked ``book``:
+  about 20 s): its timing cell, tagged ``reference-output-only`` (it times the
+  instructor's ``bench/`` script), does not run and shows the stored output under a
+  line naming what it needs;
 - the kernel that ``run.sh setup`` registers starts without ipykernel's warning about
   unencrypted TCP (a real ``ipykernel install``, started as Jupyter starts it).
 """
@@ -276,6 +280,40 @@ def test_the_grid_figure_shows_the_students_grid_once_it_is_written(release, tmp
     outputs = nb.cells[figure].outputs
     assert not any(_text(o).startswith("[reference output]") for o in outputs), [_text(o) for o in outputs]
     assert any("image/png" in o.get("data", {}) for o in outputs)
+
+
+@pytest.mark.book
+def test_chapter_03b_runs_on_the_reference_and_only_shows_its_timing(release, tmp_path, monkeypatch):
+    import nbformat
+    from nbclient import NotebookClient
+
+    student = tmp_path / "course"
+    shutil.copytree(release.student, student)
+    shutil.rmtree(student / "exercises")
+    shutil.copytree(REPO / "solutions", student / "exercises", ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setenv("PYTHONPATH", str(student))
+    monkeypatch.delenv("GRADER_CHECK_PACKAGE", raising=False)
+    monkeypatch.delenv("COURSE_NOTEBOOKS", raising=False)
+    path = student / "book" / "03b_dynamic_aabb_tree.ipynb"
+    nb = nbformat.read(path, as_version=4)
+    shown = [c for c in nb.cells if c.cell_type == "code" and c.source.startswith("%%reference_output ")]
+    assert [c.id for c in shown] == ["cell-013"], [c.id for c in shown]
+    stored = shown[0].outputs
+    assert "bench_dynamic_tree" in shown[0].source and stored
+    nb.cells.append(nbformat.v4.new_code_cell(
+        "import sys\nprint('RAN=' + str(['bench_dynamic_tree' in sys.modules, 'row' in globals(), "
+        "any(p.endswith('bench') for p in sys.path)]))"))
+    NotebookClient(nb, kernel_name="collision-course", timeout=600, allow_errors=False,
+                   resources={"metadata": {"path": str(path.parent)}}).execute()   # raises on any cell's error
+    cells = {c.id: c for c in nb.cells if c.cell_type == "code"}
+    texts = [_text(o) for o in cells["cell-013"].outputs]
+    assert texts[0].startswith("[reference output] this cell is not run here: it uses bench_dynamic_tree"), texts
+    assert "the output below is the reference engine's" in texts[0], texts[0]
+    assert texts[1:] == [_text(o) for o in stored]
+    assert "RAN=[False, False, False]" in _text(nb.cells[-1].outputs[0])
+    falling_back = [i for i, c in cells.items() if i != "cell-013"
+                    and any(_text(o).startswith("[reference output]") for o in c.outputs)]
+    assert not falling_back, falling_back   # the reference package: every other cell runs
 
 
 # The kernel ------------------------------------------------------------------------------------------------------

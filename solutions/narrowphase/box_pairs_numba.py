@@ -401,5 +401,30 @@ def speculative_box_manifolds_numba(centre_a, half_a, angle_a, centre_b, half_b,
                         vertex=ints[MANIFOLD_VERTEX:MANIFOLD_VERTEX + 2].T.copy())
 
 
+@njit(cache=True, inline="always")
+def packed_feature_ids(ints, features):
+    """The feature id of each point of the manifolds ``ints`` (``MANIFOLD_*`` rows, one
+    column per pair) as one integer, ``features[k, s]`` for point ``s`` of pair ``k``:
+    ``((reference_is_b * 4 + reference_face) * 4 + incident_face) * 4 + vertex``, the
+    numpy version's tuple ``(ref, face, incident_face, vertex)`` (:func:`feature_id`)."""
+    for k in range(ints.shape[1]):
+        for s in range(ints[MANIFOLD_COUNT, k]):
+            features[k, s] = ((ints[MANIFOLD_REFERENCE_IS_B, k] * 4 + ints[MANIFOLD_REFERENCE_FACE, k]) * 4
+                              + ints[MANIFOLD_INCIDENT_FACE, k]) * 4 + ints[MANIFOLD_VERTEX + s, k]
+
+
+def feature_id(code: int) -> tuple:
+    """The feature id ``("A" or "B", face, incident_face, vertex)`` packed as ``code`` by
+    :func:`packed_feature_ids`.
+
+    >>> feature_id(((1 * 4 + 2) * 4 + 3) * 4 + 1)
+    ('B', 2, 3, 1)
+    """
+    rest, vertex = divmod(code, 4)
+    rest, incident_face = divmod(rest, 4)
+    reference_is_b, face = divmod(rest, 4)
+    return ("B" if reference_is_b else "A", face, incident_face, vertex)
+
+
 # Cached machine code compiled from older sources is forgotten (solutions.compiled_cache).
 forget_stale_machine_code(globals())

@@ -44,8 +44,8 @@ the start for a few bodies, the step runs in a function compiled without referen
 counts (:func:`_step_on_pairs`), where the many views it makes of its blocks cost nothing.
 
 Conventions: SI units; normal from body ``i`` to body ``j`` of a pair ``i < j``; a
-feature id ``(ref, face, incident_face, vertex)`` is stored as the integer
-``((ref_is_b * 4 + face) * 4 + incident_face) * 4 + vertex``.
+feature id ``(ref, face, incident_face, vertex)`` is stored as one integer
+(:func:`~solutions.narrowphase.box_pairs_numba.packed_feature_ids`).
 """
 from __future__ import annotations
 
@@ -56,10 +56,8 @@ from numba import njit
 
 from ..body_state import EXTENT_X, EXTENT_Y, INVERSE_INERTIA, INVERSE_MASS
 from ..contact import Contact
-from ..narrowphase.box_pairs_numba import (CLIPPING_FLOATS, CLIPPING_INTS, MANIFOLD_COUNT, MANIFOLD_FLOATS,
-                                           MANIFOLD_INCIDENT_FACE, MANIFOLD_INTS, MANIFOLD_REFERENCE_FACE,
-                                           MANIFOLD_REFERENCE_IS_B, MANIFOLD_VERTEX, indexed_manifolds,
-                                           matmul_rounding)
+from ..narrowphase.box_pairs_numba import (CLIPPING_FLOATS, CLIPPING_INTS, MANIFOLD_FLOATS, MANIFOLD_INTS,
+                                           feature_id, indexed_manifolds, matmul_rounding, packed_feature_ids)
 from ..broadphase.pairs_numba import STRIP_GRID_MIN_BODIES, candidate_pairs, faces_and_aabbs, few_candidate_pairs
 from .soft_step_layout import (FIGURE_BLOCK_MANIFOLDS, FIGURE_CANDIDATE_PAIRS, FIGURE_MANIFOLDS, FIGURE_MEMORY,
                                FIGURE_POINTS, FIGURE_WARM_STARTED, HEADER_CAPACITY, HEADER_COUNT, HEADER_JOINTS,
@@ -274,7 +272,6 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     manifold_ints = block.reshape((MANIFOLD_INTS, m))
     block, fi = take(work_floats, fi, MANIFOLD_FLOATS * m)
     manifold_floats = block.reshape((MANIFOLD_FLOATS, m))
-    count = manifold_ints[MANIFOLD_COUNT]
     if circles:
         circle_manifolds(key_i, key_j, position, half, manifold_ints, manifold_floats)
     else:
@@ -282,12 +279,7 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
         clipping_ints, ii = take(work_ints, ii, CLIPPING_INTS)
         indexed_manifolds(faces, key_i, key_j, margin, incident_rounding, manifold_ints, manifold_floats,
                            clipping_floats, clipping_ints)
-        ref_is_b, ref_face = manifold_ints[MANIFOLD_REFERENCE_IS_B], manifold_ints[MANIFOLD_REFERENCE_FACE]
-        inc_face = manifold_ints[MANIFOLD_INCIDENT_FACE]
-        for k in range(m):
-            for s in range(count[k]):
-                features[k, s] = ((ref_is_b[k] * 4 + ref_face[k]) * 4 + inc_face[k]) * 4 + manifold_ints[
-                    MANIFOLD_VERTEX + s, k]
+        packed_feature_ids(manifold_ints, features)
 
     # 3. The prestep (ContactPreparation.prepare and SoftStepSolver.begin_step).
     points, contacts, blocks, soft_rows, static_members, warm_started, ii, fi = prepare(
@@ -511,13 +503,7 @@ class CompiledSoftStep:
             depths = np.maximum(-rows[:, POINT_SEPARATION], 0.0)
             ids = []
             for code in ints[p:p + count, POINT_FEATURE].tolist():
-                if code == CIRCLE_FEATURE:
-                    ids.append(("circle", "circle"))
-                    continue
-                ref_face, vertex = divmod(code, 4)
-                ref_face, incident = divmod(ref_face, 4)
-                ref, face = divmod(ref_face, 4)
-                ids.append(("B" if ref else "A", face, incident, vertex))
+                ids.append(("circle", "circle") if code == CIRCLE_FEATURE else feature_id(code))
             out.append((key // n, key % n, Contact(rows[0, POINT_NX:POINT_NY + 1], depths.max(),
                                                    rows[:, POINT_X:POINT_Y + 1], depths, tuple(ids),
                                                    rows[:, POINT_SEPARATION])))

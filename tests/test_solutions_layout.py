@@ -16,7 +16,7 @@ SOLUTIONS = Path(__file__).resolve().parent.parent / "solutions"
 MAX_LINES = 550
 #: Modules already longer, each held to its length at the time this test was written
 #: (they may shrink, not grow; split them and remove them from here).
-LONGER_TODAY = {"response/soft_step_numba.py": 756}
+LONGER_TODAY: dict[str, int] = {}
 
 
 def modules() -> list[Path]:

@@ -114,6 +114,12 @@ def _formatted(text: str, spec: str) -> str:
     return format(value, spec) if spec else str(value)
 
 
+def _quotes(paragraph: str, value: str) -> bool:
+    """Whether ``paragraph`` quotes ``value`` as a number of its own (a glued 2 is not
+    the 2 of "box2d-lite")."""
+    return re.search(rf"(?<![\w.]){re.escape(value)}(?![\w])", paragraph) is not None
+
+
 def test_glued_values_are_the_reference_runs_and_say_so(release):
     quoted = 0
     for path in sorted(CHAPTERS.glob("*.ipynb")):
@@ -132,10 +138,14 @@ def test_glued_values_are_the_reference_runs_and_say_so(release):
                 shown = _formatted(values[key], spec)
                 assert shown in student[cell["id"]], (path.name, cell["id"], key, shown)
                 quoted += 1
-            if GLUE_ROLE.search(_source(cell)):
-                paragraphs = student[cell["id"]].split("\n\n")
-                assert all(REFERENCE_NOTE in p for p in paragraphs if any(
-                    _formatted(values[k], s) in p for k, s in GLUE_ROLE.findall(_source(cell)))), cell["id"]
+            # Each paragraph of the chapter that quotes glued values becomes a paragraph of
+            # the student's that quotes them and ends with the note.
+            paragraphs = student[cell["id"]].split("\n\n")
+            for source_paragraph in re.split(r"\n[ \t]*\n", _source(cell)):
+                shown = [_formatted(values[k], s) for k, s in GLUE_ROLE.findall(source_paragraph)]
+                if shown:
+                    assert any(REFERENCE_NOTE in p and all(_quotes(p, value) for value in shown)
+                               for p in paragraphs), (path.name, cell["id"], shown)
     assert quoted >= len(glue_keys()) // 2, quoted
 
 

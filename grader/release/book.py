@@ -511,11 +511,23 @@ def _is_hidden_glue(output: dict) -> bool:
 _GLUE_ROLE = re.compile(r"\{glue(:\w*)?\}`")
 
 
+_CLOSING_FENCE = re.compile(r"\n[ \t]*(`{3,}|:{3,})[ \t]*$")
+
+
+def _with_glued_note(paragraph: str) -> str:
+    """``paragraph`` ending with :data:`GLUED_NOTE`, inside a directive whose closing fence
+    ends the paragraph (a ``{solution}`` becomes a ``<details>`` block: the note stays in it)."""
+    text = paragraph.rstrip()
+    fence = _CLOSING_FENCE.search(text)
+    body, closing = (text[:fence.start()], text[fence.start():]) if fence else (text, "")
+    return f"{body}\n{GLUED_NOTE}{closing}{paragraph[len(text):]}"
+
+
 def mark_glued_paragraphs(source: str) -> str:
     """MyST ``source`` with :data:`GLUED_NOTE` ending each paragraph that quotes a glued value."""
     parts = re.split(r"(\n[ \t]*\n)", source)   # paragraphs, and the blank lines between them
-    return "".join(f"{part.rstrip()}\n{GLUED_NOTE}{part[len(part.rstrip()):]}"
-                   if index % 2 == 0 and _GLUE_ROLE.search(part) else part for index, part in enumerate(parts))
+    return "".join(_with_glued_note(part) if index % 2 == 0 and _GLUE_ROLE.search(part) else part
+                   for index, part in enumerate(parts))
 
 
 def student_notebook(nb, stem: str, converter: MystToMarkdown, modules: StudentModules | None = None):

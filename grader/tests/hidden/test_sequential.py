@@ -23,10 +23,11 @@ import pytest
 from grader.harness.compare import show
 from grader.harness.credit import check_cases, fail
 from grader.harness.student_code import register
+from grader.oracles import upright_scenes as scenes
 from grader.sandbox.codec import is_number
-from grader.tests.public.test_sequential import (SWEEPS, answer_problem, describe, point_problem, prestep_cases,
-                                                 random_cases, random_joint_rows, random_sweep_cases,
-                                                 random_targets, scene_calls, sweep_problem)
+from grader.tests.public.test_sequential import (SWEEPS, answer_problem, describe, follow_targets, landing_ball,
+                                                 point_problem, prestep_cases, random_cases, random_joint_rows,
+                                                 random_sweep_cases, random_targets, scene_calls, sweep_problem)
 from solutions.body import Body
 from solutions import joints as joint_solver
 from solutions.contact import Contact
@@ -261,3 +262,22 @@ def test_pyramid_stands(student):
         world.step(DT)
     moved = float(np.abs(np.array([body.position.tolist() for body in bodies]) - start).max())
     assert moved < 0.02, f"{scene}: after 1 s a box has moved {moved:.3f} m from where it rested"
+
+
+#: The balls landing either side of a 0.5 m/s restitution threshold: (the closing speed
+#: when they touch the ground, on the second step (m/s), e, the height of their lowest
+#: point at the start (m)).
+LANDINGS = [(0.3, 0.9, 0.0005), (0.45, 0.7, 0.002), (0.55, 0.6, 0.001), (0.7, 0.5, 0.004), (0.8, 0.3, 0.0005),
+            (1.0, 0.4, 0.003), (1.2, 0.2, 0.001), (2.0, 0.2, 0.006)]
+
+
+@pytest.mark.points(2)
+@pytest.mark.visibility("hidden")
+@pytest.mark.title("Scene: eight balls landing either side of a 0.5 m/s restitution threshold bounce only above it "
+                   "and are pushed out to the slop")
+def test_landings_either_side_of_the_threshold(student):
+    settings = scenes.SceneSettings(restitution_threshold=0.5)
+    balls = [landing_ball(speed, e, above, x=2.0 * k) for k, (speed, e, above) in enumerate(LANDINGS)]
+    follow_targets(student, "the eight balls landing either side of a 0.5 m/s threshold", balls, settings, 60,
+                   "a contact closing faster than the threshold leaves at e times its speed, a slower one does not "
+                   "bounce; an overlap beyond the slop is pushed out at bias_factor (overlap - slop) / h")

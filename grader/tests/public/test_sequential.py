@@ -321,8 +321,9 @@ TARGET_FIELDS = ("normal_velocity", "restitution", "depth", "dt", "restitution_t
 
 def expected_target(normal_velocity, restitution, depth, dt, threshold, bias_factor, slop, max_push):
     """The larger of the bounce (only above the threshold) and the capped Baumgarte push."""
-    bounce = -restitution * normal_velocity if -normal_velocity > threshold else 0.0
-    return max(bounce, min(bias_factor * max(depth - slop, 0.0) / dt, max_push))
+    return scenes.target_speed(normal_velocity, restitution, depth,
+                               scenes.SceneSettings(dt=dt, restitution_threshold=threshold, bias_factor=bias_factor,
+                                                    slop=slop, max_push=max_push))
 
 
 TARGET_CASES = [
@@ -570,3 +571,77 @@ def test_bounce_whatever_the_sweeps(student):
         assert abs(ball.velocity[1] - 4.0) < 1e-9, (f"the ball hitting the ground at 5 m/s with e = 0.8 leaves at "
                                                     f"{ball.velocity[1]:+.4f} m/s after {iterations} sweeps, "
                                                     "+4 m/s expected (the target is fixed before the sweeps)")
+
+
+
+# Scenes of contact_target alone --------------------------------------------------------
+# Bodies that move only up and down, each alone on the ground, every contact point as
+# deep: the oracle solves their contact exactly (the sweeps would bring the velocity to
+# the target, or leave a faster one), so only contact_target is graded by these scenes.
+def follow_targets(student, scene: str, bodies: list, settings, steps: int, hint: str) -> None:
+    """Step ``bodies`` with the student's targets and compare every body's overlap and
+    velocity, step by step, with the physics' (:func:`upright_scenes.vertical_paths`)."""
+    want = scenes.vertical_paths(bodies, settings, steps)
+    got = scenes.vertical_paths(bodies, settings, steps, scene_calls(student, scene))
+    for step, (got_step, want_step) in enumerate(zip(got, want)):
+        for index, ((depth, velocity), (want_depth, want_velocity)) in enumerate(zip(got_step, want_step)):
+            if abs(depth - want_depth) > 1e-9 or abs(velocity - want_velocity) > 1e-9:
+                which = f"body {index + 1}" if len(bodies) > 1 else "it"
+                fail(f"{scene}, step {step + 1}: {which} overlaps the ground by {depth * 1e3:+.3f} mm and moves at "
+                     f"{velocity:+.4f} m/s; {want_depth * 1e3:+.3f} mm and {want_velocity:+.4f} m/s expected "
+                     f"({hint})")
+
+
+PUSH_HINT = "an overlap beyond the slop is pushed out at bias_factor (overlap - slop) / h, at most max_push"
+
+
+def landing_ball(speed: float, restitution: float, above: float = 0.001, x: float = 0.0, dt: float = 1 / 60):
+    """A 1 kg ball of radius 0.5 m, its lowest point ``above`` m over the ground, that
+    touches the ground on the second step closing at ``speed`` (m/s, gravity included)."""
+    return scenes.Upright(1.0, radius=0.5, x=x, y=0.5 + above, velocity=[0.0, -speed + 2 * scenes.G * dt, 0.0],
+                          restitution=restitution)
+
+
+@pytest.mark.points(2)
+@pytest.mark.title("Scene: a ball landing at 0.9 m/s, below the restitution threshold, does not bounce (e = 0.8)")
+def test_slow_landing_stays(student):
+    """It touches 11 mm deep: it stops there, then the push lifts it to the slop."""
+    follow_targets(student, "the ball landing at 0.9 m/s (threshold 1 m/s, e = 0.8)", [landing_ball(0.9, 0.8)],
+                   scenes.SceneSettings(), 60, f"closing slower than the threshold, it does not bounce; {PUSH_HINT}")
+
+
+@pytest.mark.points(2)
+@pytest.mark.title("Scene: a ball landing at 1.2 m/s, above the threshold, leaves at e v; landing again below it, "
+                   "it stays")
+def test_landing_above_threshold_bounces(student):
+    follow_targets(student, "the ball landing at 1.2 m/s (threshold 1 m/s, e = 0.6)", [landing_ball(1.2, 0.6)],
+                   scenes.SceneSettings(), 60,
+                   f"it leaves at 0.6 x 1.2 = 0.72 m/s, lands again below the threshold and stays; {PUSH_HINT}")
+
+
+@pytest.mark.points(2)
+@pytest.mark.title("Scene: a box sunk 30 cm into the ground rises at the capped push of 1 m/s and stops at the slop")
+def test_sunk_box_pushed_out(student):
+    """A 1 m box (e = 0.5) that cannot turn, its bottom 0.3 m below the ground, at rest:
+    the push wants 0.2 x 0.295 m / h = 3.5 m/s, capped at 1 m/s, until the overlap
+    beyond the slop is below 8 cm; then 20 % of it a step; it never leaves the ground."""
+    box = scenes.Upright(1.0, 0.5, 0.5, y=0.2, restitution=0.5, turns=False)
+    follow_targets(student, "the box sunk 30 cm into the ground (max_push = 1 m/s)", [box],
+                   scenes.SceneSettings(max_push=1.0), 60,
+                   f"{PUSH_HINT}; closing slowly after, the box does not bounce")
+
+
+@pytest.mark.points(2)
+@pytest.mark.title("Scene: five bodies resting on the ground with e = 0.3 to 1, three of them spawned 1 to 4 cm deep, "
+                   "rise to the slop and stay")
+def test_resting_bodies_stay(student):
+    """Gravity makes a resting contact close at g h = 0.16 m/s every step, below the
+    threshold: none of them bounces, whatever its e; the overlaps beyond the slop are
+    pushed out."""
+    bodies = [scenes.Upright(1.0, 0.5, 0.5, x=0.0, y=0.5, restitution=1.0, turns=False),
+              scenes.Upright(1.0, radius=0.5, x=2.0, y=0.5, restitution=0.5),
+              scenes.Upright(2.0, 0.4, 0.25, x=4.0, y=0.23, restitution=0.8, turns=False),
+              scenes.Upright(1.0, radius=0.3, x=6.0, y=0.26, restitution=0.3),
+              scenes.Upright(1.0, 0.5, 0.5, x=8.0, y=0.49, restitution=0.6, turns=False)]
+    follow_targets(student, "the five resting bodies (e = 1, 0.5, 0.8, 0.3, 0.6)", bodies, scenes.SceneSettings(), 60,
+                   f"a contact closing slower than the threshold does not bounce; {PUSH_HINT}")

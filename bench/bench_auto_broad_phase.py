@@ -7,7 +7,7 @@ Times one step's collision detection, ``World.broad_phase`` then ``World.narrow_
 :data:`solutions.world.BROAD_PHASES` but ``"auto"``, on four kinds of scene of 2 to 160
 bodies:
 
-- "balls in walls": chapter 11's ``many_bodies`` (balls among four static box walls);
+- "balls in walls": the speed chapter's ``many_bodies`` (balls among four static box walls);
 - "boxes on a ground": 1 m boxes in rows of 8 on a static ground (every box touches);
 - "scattered balls" and "scattered boxes": 0.2 m balls / 0.5 m boxes at random
   positions (boxes at random angles) over 10 m x 10 m, no walls.

@@ -73,7 +73,7 @@ BROAD_PHASES = ("auto", "all_pairs", "brute_force", "uniform_grid", "quadtree", 
 
 #: ``broad_phase="auto"`` takes the method measured fastest for the scene
 #: (bench/bench_auto_broad_phase.py: processor time of one step's detection, broad plus
-#: narrow phase, 2 to 160 bodies; balls among box walls as in chapter 11, boxes on a
+#: narrow phase, 2 to 160 bodies; balls among box walls as in the speed chapter, boxes on a
 #: ground, balls or boxes scattered).  Testing every pair directly wins only where the
 #: narrow phase costs less than building the AABBs: in scenes of at most this many
 #: bodies ...

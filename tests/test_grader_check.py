@@ -176,7 +176,7 @@ def pixels_near(image: np.ndarray, color: str, tolerance: float = 0.08) -> int:
 def chapter_order() -> list[str]:
     """The exercises in the order the book's chapters check them (their ``check("...")`` cells)."""
     found: list[str] = []
-    for chapter in sorted((REPO / "book" / "chapters").glob("[0-9][0-9]*_*.md")):  # 03b_ after 03_
+    for chapter in sorted((REPO / "book" / "chapters").glob("[0-9][0-9]_*.md")):
         for exercise in re.findall(r'check\("(\w+)"\)', chapter.read_text(encoding="utf-8")):
             if exercise not in found:
                 found.append(exercise)

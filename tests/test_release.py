@@ -192,7 +192,7 @@ def test_student_folder_layout(release):
     # README: the two commands, the notebooks, submitting; not a word of solutions.
     readme = (student / "README.md").read_text()
     for text in ("bash run.sh setup", "bash run.sh check", "bash run.sh lab", "bash run.sh submit",
-                 "%%reference_fallback", "07_momentum.ipynb"):
+                 "%%reference_fallback", "08_momentum.ipynb"):
         assert text in readme, text
     assert "solution" not in readme.lower()
     run_sh = (student / "run.sh").read_text()
@@ -706,7 +706,7 @@ def test_student_setup_in_fresh_venv(release, tmp_path):
     assert lab.stdout.startswith("4."), lab.stdout
     # A chapter runs in the student's own kernel, and its check cell runs the student's tests.
     run = ("import nbformat, sys\nfrom nbclient import NotebookClient\n"
-           "nb = nbformat.read('book/07_momentum.ipynb', as_version=4)\n"
+           "nb = nbformat.read('book/08_momentum.ipynb', as_version=4)\n"
            "NotebookClient(nb, kernel_name='collision-course', timeout=600,"
            " resources={'metadata': {'path': 'book'}}).execute()\n"
            "print(sum('[reference output]' in str(c.get('outputs')) for c in nb.cells), 'fallbacks')\n"

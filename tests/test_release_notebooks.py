@@ -15,7 +15,7 @@ One release is built for the module (about 6 s).  Then:
 - the cells the book hides (each chapter's set-up cell, figures' drawing code) open
   collapsed in JupyterLab;
 - Fig. 3.1 draws the student's grid once the grid exercise is written (marked ``book``);
-- chapter 03b runs to its end on a package filled with the reference (marked ``book``:
+- chapter 04 (the dynamic tree) runs to its end on a package filled with the reference (marked ``book``:
   about 20 s): its timing cell, tagged ``reference-output-only`` (it times the
   instructor's ``bench/`` script), does not run and shows the stored output under a
   line naming what it needs;
@@ -232,7 +232,7 @@ def test_the_fallback_finds_the_reference_in_the_notebook_as_saved(release, tmp_
 
     student = tmp_path / "course"
     shutil.copytree(release.student, student)
-    path = student / "book" / "07_momentum.ipynb"
+    path = student / "book" / "08_momentum.ipynb"
     shipped = {c.id: c.outputs for c in nbformat.read(path, as_version=4).cells if c.cell_type == "code"}
     monkeypatch.setenv("PYTHONPATH", str(student))
     monkeypatch.delenv("GRADER_CHECK_PACKAGE", raising=False)
@@ -264,7 +264,7 @@ def test_the_fallback_finds_the_reference_in_the_notebook_as_saved(release, tmp_
     mine.outputs = [nbformat.v4.new_output("stream", name="stdout", text="my own run\n")]
     nbformat.write(nb, path)
     again = run_and_save()
-    assert "no longer in 07_momentum.ipynb" in again[mine.id], again[mine.id]
+    assert "no longer in 08_momentum.ipynb" in again[mine.id], again[mine.id]
     assert {k: v for k, v in again.items() if k != mine.id} == {k: v for k, v in first.items() if k != mine.id}
 
 
@@ -293,7 +293,7 @@ def test_the_grid_figure_shows_the_students_grid_once_it_is_written(release, tmp
 
 
 @pytest.mark.book
-def test_chapter_03b_runs_on_the_reference_and_only_shows_its_timing(release, tmp_path, monkeypatch):
+def test_dynamic_tree_chapter_runs_on_the_reference_and_only_shows_its_timing(release, tmp_path, monkeypatch):
     import nbformat
     from nbclient import NotebookClient
 
@@ -304,7 +304,7 @@ def test_chapter_03b_runs_on_the_reference_and_only_shows_its_timing(release, tm
     monkeypatch.setenv("PYTHONPATH", str(student))
     monkeypatch.delenv("GRADER_CHECK_PACKAGE", raising=False)
     monkeypatch.delenv("COURSE_NOTEBOOKS", raising=False)
-    path = student / "book" / "03b_dynamic_aabb_tree.ipynb"
+    path = student / "book" / "04_dynamic_aabb_tree.ipynb"
     nb = nbformat.read(path, as_version=4)
     shown = [c for c in nb.cells if c.cell_type == "code" and c.source.startswith("%%reference_output ")]
     assert [c.id for c in shown] == ["cell-013"], [c.id for c in shown]

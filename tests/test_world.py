@@ -179,7 +179,7 @@ def test_auto_broad_phase_takes_the_fastest_measured_method(monkeypatch):
     # Measured by bench/bench_auto_broad_phase.py: all pairs directly only for 2 bodies
     # and for scenes of circles only up to 40; the brute-force AABB test for other scenes
     # below 80 bodies; the numpy grid from 80 on.  The old rule (all pairs below 16
-    # bodies, the numpy grid above) took the slowest method for chapter 11's 4 balls
+    # bodies, the numpy grid above) took the slowest method for the speed chapter's 4 balls
     # among 4 walls and for 4 to 12 scattered boxes.
     def boxes(n):
         return [Body.box(0.5, 0.5, mass=1.0, position=(1.0 * (k % 8), 1.0 * (k // 8))) for k in range(n)]

@@ -68,7 +68,7 @@ MATHJAX = VENDOR / "mathjax"
 MATHJAX_PARTS = ("tex-mml-chtml.js", "input", "output/chtml", "ui", "a11y", "sre", "adaptors")
 
 #: Chapter file names: two digits, an underscore, lower-case words joined by underscores.
-CHAPTER_NAME = re.compile(r"^\d\d[a-z]?_[a-z0-9]+(?:_[a-z0-9]+)*$")  # 03b_: a chapter placed between 03 and 04
+CHAPTER_NAME = re.compile(r"^\d\d_[a-z0-9]+(?:_[a-z0-9]+)*$")
 
 #: Kernel environment: inline PNG figures whatever MPLBACKEND the caller has, no
 #: debugger warning about frozen modules on the kernel's stderr, and the exercise

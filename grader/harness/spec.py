@@ -14,8 +14,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 VISIBILITIES = ("visible", "hidden", "after_due_date", "after_published")
-#: The exercises in the order the book teaches them (its chapters 3, 3b (the dynamic tree), 5, 6,
-#: 7, 8 and 10): ``grader check`` lists them in this order.
+#: The exercises in the order the book teaches them (its chapters 3, 4 (the dynamic tree), 6, 7,
+#: 8, 9 and 11): ``grader check`` lists them in this order.
 EXERCISES = ("grid", "quadtree", "dynamic_tree", "sat", "contacts", "momentum", "impulse", "sequential")
 #: Where the graded tests are: public (students hold them) and hidden (the instructor's).
 TESTS_DIR = Path(__file__).resolve().parents[1] / "tests"

@@ -19,7 +19,7 @@ compute).  Any other error is shown as usual: it is a bug to fix.
 A cell that uses what only the instructor's edition of the course holds (the
 instructor's benchmark scripts, a compiled engine) starts with a line such as::
 
-    %%reference_output 03b_dynamic_aabb_tree:cell-014 bench_dynamic_tree,sys.path
+    %%reference_output 04_dynamic_aabb_tree:cell-014 bench_dynamic_tree,sys.path
 
 Its code is there to read, but it never runs: it prints one line saying what it needs
 and shows the reference output stored with it, found as above.

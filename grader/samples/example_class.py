@@ -558,37 +558,32 @@ QUADTREE_ON_SPLIT_LINE = BuggySample(
 
 # dynamic tree -------------------------------------------------------------------------
 
-SIBLING_WITHOUT_INHERITED_COST = BuggySample(
-    name="dynamic-tree-sibling-no-ancestor-cost",
-    mistake="DynamicTree.best_sibling compares the candidates by their new parent's perimeter alone, forgetting "
-            "what the ancestors grow by to hold the new box, so it prefers a deep node near the box to a "
-            "cheaper node higher up.",
+SIBLING_ALWAYS_ROOT = BuggySample(
+    name="dynamic-tree-sibling-always-root",
+    mistake="DynamicTree.best_sibling returns the root, the one candidate that is always possible, so every new "
+            "leaf hangs beside the whole tree and only the rotations give the tree a shape.",
     erratum=0,
     replacements=(Replacement("broadphase.dynamic_tree", "DynamicTree.best_sibling", '''
         def best_sibling(self, box) -> TreeNode:
-            box_perimeter = perimeter(box)
-            best, best_cost = self.root, perimeter(union(self.root.box, box))
-            stack = [(self.root, 0.0)]
-            while stack:
-                node, inherited = stack.pop()
-                joined = perimeter(union(node.box, box))
-                if joined < best_cost:
-                    best, best_cost = node, joined
-                if node.is_leaf:
-                    continue
-                inherited += joined - perimeter(node.box)
-                if box_perimeter + inherited < best_cost:
-                    stack.append((node.child1, inherited))
-                    stack.append((node.child2, inherited))
-            return best
+            return self.root
         '''),),
     expected_failures=frozenset({
-        # Random trees where a leaf near the new box makes a smaller parent than the cheapest
-        # node, but the ancestors above it must grow more than that saves.
+        # The root is rarely the least-cost node of a random tree.
         "dynamic_tree.best_sibling",
         "dynamic_tree.best_sibling_large",
-        # Not failed: the trees it builds are valid and their cost stays within 1.5 times a
-        # median-split tree's (the quality tests); the pairs are right.
+        # Its trees cost 9 times a median-split tree's (at most 1.5 allowed).
+        "dynamic_tree.quality",
+        "dynamic_tree.quality_sorted",
+        # Their large boxes make each body's search enter most of the tree: the growth
+        # check finds the work of a brute force.
+        "dynamic_tree.random",
+        "dynamic_tree.large_random",
+        "dynamic_tree.degenerate_scenes",
+        # Not failed: the pairs, structures and moves of small scenes are right (the tree
+        # is valid, only badly shaped).  A best_sibling that leaves out what the ancestors
+        # grow by is a subtler bug, but its trees cost within 7 % of the reference's and only
+        # best_sibling and best_sibling_large see it: 3 of best_sibling's 22 points (every
+        # test reaches it through insert_leaf), under half, so it is not a sample.
     }),
 )
 
@@ -771,7 +766,10 @@ TREE_PAIRS_STRICT_TOUCHING = BuggySample(
         # integer corners.
         "dynamic_tree.special_cases",
         "dynamic_tree.degenerate_scenes",
-        # Not failed: random and moving scenes (no two boxes there end exactly on one line).
+        # The resting crates among the random scenes (4 of 22; 2 of 8 hidden), all touching.
+        "dynamic_tree.random",
+        "dynamic_tree.large_random",
+        # Not failed: the moving scenes (no two boxes there end exactly on one line).
     }),
 )
 
@@ -1795,7 +1793,7 @@ BUGGY_SAMPLES: tuple[BuggySample, ...] = (
     ELASTIC_SWAPPED_MASSES, RESTITUTION_SIGN,
     GRID_OWN_CELL, GRID_STRICT_TOUCHING, GRID_MISSING_LAST_CELL, GRID_INT_CENTRE_CELL, GRID_CENTER_3X3,
     QUADTREE_DROPS_STRADDLING, QUADTREE_STRADDLER_IN_ONE_CHILD, QUADTREE_NO_DESCENDANTS, QUADTREE_ON_SPLIT_LINE,
-    SIBLING_WITHOUT_INHERITED_COST, INSERT_WITHOUT_REFIT, REMOVE_SIBLING_KEEPS_OLD_PARENT,
+    SIBLING_ALWAYS_ROOT, INSERT_WITHOUT_REFIT, REMOVE_SIBLING_KEEPS_OLD_PARENT,
     MOVE_REINSERTS_EVERY_FRAME, MOVE_NEVER_REINSERTS, TREE_PAIRS_STRICT_TOUCHING, TREE_PAIRS_BOTH_ORDERS,
     FLT_MIN, NO_RESET, ABS_PROJECTION, DIAMETER, UNNORMALISED_AXIS, SAT_ONLY_A_AXES, SAT_EDGE_DIRECTIONS,
     CIRCLE_NO_VERTEX_AXIS, INTERVALS_STRICT,

@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from grader.oracles.random_cases import clustered_aabbs, random_aabbs
+from grader.oracles.random_cases import clustered_aabbs, random_aabbs, resting_piles
 from grader.tests.public.test_dynamic_tree import (MARGIN, check_moving, check_pair_scenes, check_quality,
                                                    check_siblings, check_structures, moving_scene)
 
@@ -86,4 +86,6 @@ def test_degenerate_scenes(student):
 def test_large_random(student):
     rng = np.random.default_rng(402)
     scenes = [(random_aabbs(rng, 600, world=50.0) if k % 2 else clustered_aabbs(rng, 600), MARGIN) for k in range(6)]
-    check_pair_scenes(student, scenes, "600 boxes")
+    piles = np.random.default_rng(407)       # resting crates, touching exactly
+    scenes += [(resting_piles(piles, 300, origin=piles.integers(-25, 5, 2)), margin) for margin in (MARGIN, 0.0)]
+    check_pair_scenes(student, scenes, "600 random boxes, 300 resting crates")

@@ -24,7 +24,7 @@ from grader.harness.outcome import StudentCallFailed
 from grader.oracles.aabb_tree_shape import (COST_TOLERANCE, grown, median_split_cost, reinsertions, sibling_costs,
                                             structure_problem, well_formed)
 from grader.oracles.brute_force import describe_boxes, overlapping_pairs, pairs_figure
-from grader.oracles.random_cases import clustered_aabbs, random_aabbs
+from grader.oracles.random_cases import clustered_aabbs, random_aabbs, resting_piles
 from grader.oracles.scaling import growth_problem, sparse_scene
 
 MODULE = "broadphase.dynamic_tree"
@@ -321,4 +321,7 @@ def test_random(student):
     rng = np.random.default_rng(301)
     scenes = [(random_aabbs(rng, 80, world=25.0) if k % 3 else clustered_aabbs(rng, 80), (0.1, 0.0, 0.5)[k % 3])
               for k in range(18)]
-    check_pair_scenes(student, scenes, "random boxes")
+    # Resting crates: every box touches its neighbours exactly, along an edge or at a corner.
+    piles = np.random.default_rng(307)
+    scenes += [(resting_piles(piles, 80, origin=piles.integers(-25, 5, 2)), (0.1, 0.0)[k % 2]) for k in range(4)]
+    check_pair_scenes(student, scenes, "random boxes and resting crates")

@@ -565,6 +565,8 @@ def test_suggest_cell_size_is_always_usable(boxes):
 EXPECTED_STUBS = {
     "uniform_grid.py": ["pairs_grid_every_cell", "pairs_grid_center_cell"],
     "quadtree.py": ["Quadtree.child_holding", "Quadtree.insert", "Quadtree.split", "Quadtree.pairs"],
+    "dynamic_tree.py": ["DynamicTree.best_sibling", "DynamicTree.insert_leaf", "DynamicTree.remove_leaf",
+                        "DynamicTree.move", "DynamicTree.pairs"],
 }
 
 

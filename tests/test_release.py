@@ -133,7 +133,7 @@ def test_the_student_edition_has_no_twins_and_steps_with_the_students_code(relea
     # files) steps the stack exactly as the instructor's readable loop does.
     solved = tmp_path / "solved"
     shutil.copytree(student / "exercises", solved / "exercises")
-    for done in ("narrowphase/polygon_polygon.py", "solver/contact_point.py"):
+    for done in ("narrowphase/polygon_polygon.py", "solver/contact_point.py", "solver/contact_sweeps.py"):
         shutil.copy(REPO / "solutions" / done, solved / "exercises" / done)
     result = subprocess.run([PYTHON, "-S", "-c", script], cwd=solved, env=student_env(solved),
                             capture_output=True, text=True, timeout=120)

@@ -432,12 +432,18 @@ def test_student_grader_loses_exactly_the_expected_tests_on_classic_bugs(release
     assert len(samples) == len(CLASSIC_BUGS)
     student = release.student
     runs = {}
+    exercise_of = {}
     for sample in samples:
+        # Each classic bug fails the tests of one exercise: check that exercise alone (the
+        # whole course's public tests, twice per bug, cost more than a minute).
+        exercises = {name.split(".", 1)[0] for name in sample.expected_failures}
+        assert len(exercises) == 1, (sample.name, exercises)
+        exercise_of[sample.name] = exercise = exercises.pop()
         folder = build_buggy_sample(sample, tmp_path)
-        runs[(sample.name, "student")] = ([PYTHON, "-S", "-c", STUDENT_GRADER, "check", "--package", str(folder)],
-                                          student, student_env(student))
-        runs[(sample.name, "instructor")] = ([PYTHON, "-m", "grader", "check", "--package", str(folder)], REPO,
-                                             student_env(REPO))
+        runs[(sample.name, "student")] = ([PYTHON, "-S", "-c", STUDENT_GRADER, "check", exercise, "--package",
+                                           str(folder)], student, student_env(student))
+        runs[(sample.name, "instructor")] = ([PYTHON, "-m", "grader", "check", exercise, "--package", str(folder)],
+                                             REPO, student_env(REPO))
 
     def run(item):
         key, (command, cwd, env) = item
@@ -450,6 +456,7 @@ def test_student_grader_loses_exactly_the_expected_tests_on_classic_bugs(release
         assert mine and mine == theirs, sample.name
         failed = {name for name, label in mine.items() if label != "PASS"}
         assert failed == sample.expected_failures & public, sample.name
+        assert {name.split(".", 1)[0] for name in mine} == {exercise_of[sample.name]}, sample.name
 
 
 # A chapter notebook --------------------------------------------------------------------------------------

@@ -106,9 +106,10 @@ def write_student_report(results_json: SubmissionResults | Path, out_html: Path,
     if submission.reason:
         body.append(f"<p><b>Not graded:</b> {_e(submission.reason)}</p>")
 
-    counts = Counter(t.outcome.status for t in submission.tests)
+    # Most frequent first; ties keep the order of first appearance.
+    counts = sorted(submission.counts().items(), key=lambda status_count: -status_count[1])
     if counts:
-        body.append("<p>" + ", ".join(f"{badge(s)} {n}" for s, n in counts.most_common()) + "</p>")
+        body.append("<p>" + ", ".join(f"{badge(s)} {n}" for s, n in counts) + "</p>")
 
     if submission.leaderboard:
         body += ["<h2>Leaderboard</h2>", *leaderboard_table(submission.leaderboard)]

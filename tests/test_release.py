@@ -596,7 +596,8 @@ def test_release_never_overwrites_what_is_not_an_earlier_release(release, tmp_pa
 
 def test_release_refuses_an_edition_that_would_reveal_a_solution(tmp_path):
     """The release's own guard (run before anything is moved into place) names each leak."""
-    from grader.release.edition import solution_blocks, verify_student
+    from grader.release.edition import verify_student
+    from grader.release.leak_scan import solution_blocks
 
     folder = tmp_path / "student"
     (folder / "exercises/response").mkdir(parents=True)

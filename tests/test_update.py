@@ -328,7 +328,7 @@ def test_grading_uses_the_courses_library_files_and_says_which_differed(tmp_path
 
 
 def test_the_graded_copy_holds_the_submissions_exercises_and_the_courses_library_only(tmp_path):
-    from grader.release.edition import scan_for_solutions, solution_blocks
+    from grader.release.leak_scan import scan_for_solutions, solution_blocks
     from grader.batch.submissions import library_files, with_course_library
 
     repo = Path(__file__).resolve().parent.parent

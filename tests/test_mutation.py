@@ -3,11 +3,14 @@ solution blocks only, are graded like submissions, and the scores leave out the
 reviewed equivalent mutants."""
 from __future__ import annotations
 
+import multiprocessing.util
+import tempfile
 import tomllib
 
 import pytest
 
-from tools import mutation
+from grader.harness.spec import TestSpec as GradedTest
+from tools import mutation, mutation_scope
 
 pytest.importorskip("cosmic_ray")
 
@@ -45,18 +48,58 @@ def test_the_equivalent_list_gives_a_reason_for_each_mutant():
         assert entry["key"] and entry["reason"].strip(), entry
 
 
-def test_mutants_are_found_in_solution_blocks_and_graded(tmp_path):
-    mutants = mutation.find_mutants(tmp_path / "session.sqlite", {"momentum"})
+def test_mutants_are_found_in_solution_blocks_graded_and_an_interrupted_run_leaves_nothing(tmp_path, monkeypatch):
+    session, temporary = tmp_path / "session", tmp_path / "temporary"
+    session.mkdir()
+    temporary.mkdir()
+    mutants = mutation.find_mutants(session / "session.sqlite", {"momentum"})
     assert mutants and {m.exercise for m in mutants} == {"momentum"}
     assert all(any(a <= m.line <= b for a, b in mutation.solution_lines(mutation.SOLUTIONS / m.module))
                for m in mutants)
-    # A mutant that changes the restitution law is killed by the public tests.
+    # A mutant that changes the restitution law is killed by the public tests; the run is
+    # interrupted (Ctrl-C) while the worker grades the next one: its folders are gone.
     chosen = next(m for m in mutants if "1.0 + e" in m.diff and m.operator.endswith("ReplaceBinaryOperator_Add_Sub"))
-    mutation._start_worker(_Slots())
-    graded = mutation.grade_mutant(chosen)
-    assert graded.killed_by == "public" and graded.test.startswith("momentum.")
+    graded = []
+
+    def interrupt(mutant, done, total):
+        graded.append(mutant)
+        assert any(temporary.iterdir())  # the workers' copies are there while it runs
+        raise KeyboardInterrupt
+
+    multiprocessing.util.get_temp_dir()  # the process's own (its forkserver's socket), removed at its exit
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
+    with pytest.raises(KeyboardInterrupt):
+        mutation.run_mutants([chosen, mutants[-1]], 1, interrupt)
+    assert graded[0].killed_by == "public" and graded[0].test.startswith("momentum.")
+    assert list(temporary.iterdir()) == []
 
 
-class _Slots:
-    def get(self):
-        return 30
+def test_a_module_is_seen_by_the_test_files_naming_what_imports_it():
+    public, hidden = mutation_scope.GRADER / "tests" / "public", mutation_scope.GRADER / "tests" / "hidden"
+    assert mutation_scope.module_name("broadphase/dynamic_tree.py") == "broadphase.dynamic_tree"
+    assert mutation_scope.module_name("broadphase/__init__.py") == "broadphase"
+    graph = mutation_scope.import_graph()
+    assert {"broadphase", "broadphase.aabb_array", "broadphase.brute_force"} <= graph["broadphase.dynamic_tree"]
+    # The hidden file names the module through the public one it imports.
+    assert mutation_scope.sees(hidden / "test_dynamic_tree.py", "broadphase.dynamic_tree")
+    # polygon_polygon imports projection: the contacts tests can run a mutant of it.
+    assert mutation_scope.sees(public / "test_contacts.py", "narrowphase.projection")
+    assert not mutation_scope.sees(public / "test_momentum.py", "broadphase.dynamic_tree")
+    assert not mutation_scope.sees(public / "test_dynamic_tree.py", "solver.contact_point")
+
+
+def test_a_mutant_is_graded_by_its_exercise_then_the_tests_seeing_it():
+    def spec(name, path, visibility="visible"):
+        folder = "public" if visibility == "visible" else "hidden"
+        return GradedTest(name, name.split(".")[0], name, 1.0, visibility,
+                        path=str(mutation_scope.GRADER / "tests" / folder / path))
+
+    tests = [spec("sat.a", "test_sat.py"), spec("contacts.b", "test_contacts.py"),
+             spec("momentum.c", "test_momentum.py"), spec("sat.d", "test_sat.py", "hidden"),
+             spec("contacts.e", "test_contacts.py", "hidden")]
+    groups = mutation_scope.tests_seeing("narrowphase/projection.py", "sat", tests)
+    assert [(suite, [t.name for t in chosen]) for suite, chosen in groups] == [
+        ("public", ["sat.a"]), ("public", ["contacts.b"]), ("hidden", ["sat.d"]), ("hidden", ["contacts.e"])]
+    every = mutation_scope.tests_seeing("narrowphase/projection.py", "sat", tests, every=True)
+    assert [t.name for _, chosen in every for t in chosen] == ["sat.a", "contacts.b", "momentum.c", "sat.d",
+                                                               "contacts.e"]

@@ -9,9 +9,15 @@ outside the blocks marked skipped, as its own filters do).  Each mutant is one
 operator applied once -- a number changed, ``+`` for ``-``, ``<`` for ``<=``, a
 condition negated, a loop that never runs -- and is graded like a submission: a copy
 of ``solutions/`` named ``exercises`` with that one change, run in the sandbox by the
-public graded tests of its exercise, then the other public ones, then the hidden ones,
-each stopping at the first test that does not pass.  A mutant is killed by the public
-tests, by the hidden ones, or survives.
+public graded tests of its exercise, then the other public ones that can see the
+mutated module, then the hidden ones in the same order, each stopping at the first test
+that does not pass.  A mutant is killed by the public tests, by the hidden ones, or
+survives.  A test file sees a module when a module of the package that it names (or
+that a grader module it imports names) imports it (:mod:`tools.mutation_scope`); the
+other tests never run the mutated code, so leaving them out changes no outcome and an
+exercise's run costs what its own tests cost (``--every-test`` runs them all, to
+compare).  The workers' copies of the package and their sandboxes live in one temporary
+folder, removed at the end, on Ctrl-C and on SIGTERM.
 
 Mutants that behave exactly as the reference (a change no input can tell apart) are
 *equivalent*: each is listed, with the reason, in ``tools/mutation_equivalent.toml``
@@ -35,12 +41,15 @@ import json
 import os
 import re
 import shutil
+import signal
 import sys
 import tempfile
 import time
 import tomllib
 from dataclasses import asdict, dataclass
 from pathlib import Path
+
+from grader.harness.spec import EXERCISES
 
 REPO = Path(__file__).resolve().parent.parent
 SOLUTIONS = REPO / "solutions"
@@ -97,7 +106,14 @@ def find_mutants(session: Path, exercises: set[str] | None) -> list[Mutant]:
     from cosmic_ray.work_db import WorkDB, use_db
     from cosmic_ray.work_item import WorkerOutcome, WorkResult
 
-    files = sorted(p for p in SOLUTIONS.rglob("*.py") if BEGIN in p.read_text(encoding="utf-8"))
+    from grader.release.exercises import EXERCISES as EXERCISES_OF_MODULES
+
+    def wanted(path: Path) -> bool:  # a module serving none of the exercises asked for holds no mutant kept
+        entry = EXERCISES_OF_MODULES.get(path.relative_to(SOLUTIONS).as_posix(), "other")
+        return not exercises or bool(set(entry.values() if isinstance(entry, dict) else [entry]) & exercises)
+
+    files = sorted(p for p in SOLUTIONS.rglob("*.py") if BEGIN in p.read_text(encoding="utf-8") and wanted(p))
+    blocks = {path: solution_lines(path) for path in files}
     mutants = []
     with use_db(str(session), WorkDB.Mode.create) as db:
         init(files, db, {})
@@ -107,7 +123,7 @@ def find_mutants(session: Path, exercises: set[str] | None) -> list[Mutant]:
             path = Path(spec.module_path)
             module = path.relative_to(SOLUTIONS).as_posix()
             line = spec.start_pos[0]
-            inside = any(first <= line <= last for first, last in solution_lines(path))
+            inside = any(first <= line <= last for first, last in blocks[path])
             operator = spec.operator_name.split("/")[-1]
             function = spec.definition_name or "?"
             exercise = exercise_of(module, function)
@@ -139,12 +155,18 @@ def find_mutants(session: Path, exercises: set[str] | None) -> list[Mutant]:
 # Workers ------------------------------------------------------------------------------------
 _WORKSPACE: Path | None = None
 _SLOT = 0
+_EVERY_TEST = False
 
 
-def _start_worker(slots) -> None:
-    global _WORKSPACE, _SLOT
-    _SLOT = slots.get()
-    _WORKSPACE = Path(tempfile.mkdtemp(prefix="mutation-"))
+def _start_worker(slots, root: str, every_test: bool = False) -> None:
+    """One worker process: its sandbox slot, its copy of the package, all under ``root``
+    (the run's temporary folder, removed by the parent whatever happens), where the
+    sandboxes' own folders go too.  Interrupting is the parent's job (it ends the workers)."""
+    global _WORKSPACE, _SLOT, _EVERY_TEST
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _SLOT, _EVERY_TEST = slots.get(), every_test
+    tempfile.tempdir = root
+    _WORKSPACE = Path(tempfile.mkdtemp(prefix=f"worker-{_SLOT}-", dir=root))
     shutil.copytree(SOLUTIONS, _WORKSPACE / "exercises", ignore=shutil.ignore_patterns("__pycache__"))
 
 
@@ -155,11 +177,13 @@ def _graded_tests():
 
 
 def grade_mutant(mutant: Mutant) -> Mutant:
-    """Apply the mutant in this worker's copy, run the tests in order, restore the copy."""
+    """Apply the mutant in this worker's copy, run the tests that can see it in order
+    (:func:`tools.mutation_scope.tests_seeing`), restore the copy."""
     from cosmic_ray.mutating import mutate_code
     from cosmic_ray.plugins import get_operator
     from grader.harness.run import run_tests
     from grader.sandbox.process import Limits
+    from tools.mutation_scope import tests_seeing
 
     started = time.perf_counter()
     target = _WORKSPACE / "exercises" / mutant.module
@@ -168,11 +192,7 @@ def grade_mutant(mutant: Mutant) -> Mutant:
     if mutated is None:
         mutant.killed_by = "none"
         return mutant
-    tests = _graded_tests()
-    own = [t for t in tests if t.exercise == mutant.exercise]
-    groups = [("public", [t for t in own if t.public]), ("public", [t for t in tests if t.public and t not in own]),
-              ("hidden", [t for t in own if not t.public]),
-              ("hidden", [t for t in tests if not t.public and t not in own])]
+    groups = tests_seeing(mutant.module, mutant.exercise, _graded_tests(), every=_EVERY_TEST)
     limits = Limits(call_timeout=5.0, cpu_seconds=60)
     try:
         target.write_text(mutated, encoding="utf-8")
@@ -190,20 +210,53 @@ def grade_mutant(mutant: Mutant) -> Mutant:
     return mutant
 
 
-def run_mutants(mutants: list[Mutant], jobs: int, progress=None) -> list[Mutant]:
+def _stop_on_sigterm(signum, frame):
+    raise SystemExit(128 + signum)
+
+
+def _result(future: concurrent.futures.Future):
+    """The future's result, waited for a second at a time: a signal handled by another
+    thread of this process then still reaches this one (a wait without end never returns
+    to Python to run the handler)."""
+    while True:
+        try:
+            return future.result(timeout=1.0)
+        except concurrent.futures.TimeoutError:
+            continue
+
+
+def run_mutants(mutants: list[Mutant], jobs: int, progress=None, every_test: bool = False) -> list[Mutant]:
+    """Grade ``mutants`` in ``jobs`` worker processes, in a temporary folder that is gone
+    when this returns or raises (Ctrl-C and SIGTERM included: the workers, and the
+    sandboxes they started, are ended first)."""
     import multiprocessing
 
     context = multiprocessing.get_context("forkserver")
-    slots = context.Manager().Queue()
+    slots = context.SimpleQueue()
     for slot in range(jobs):
         slots.put(slot)
     done = []
-    with concurrent.futures.ProcessPoolExecutor(jobs, mp_context=context, initializer=_start_worker,
-                                                initargs=(slots,)) as pool:
-        for mutant in pool.map(grade_mutant, mutants, chunksize=1):
-            done.append(mutant)
-            if progress is not None:
-                progress(mutant, len(done), len(mutants))
+    previous = signal.signal(signal.SIGTERM, _stop_on_sigterm)
+    try:
+        with tempfile.TemporaryDirectory(prefix="mutation-", ignore_cleanup_errors=True) as root:
+            pool = concurrent.futures.ProcessPoolExecutor(jobs, mp_context=context, initializer=_start_worker,
+                                                          initargs=(slots, root, every_test))
+            try:
+                for future in [pool.submit(grade_mutant, mutant) for mutant in mutants]:
+                    mutant = _result(future)
+                    done.append(mutant)
+                    if progress is not None:
+                        progress(mutant, len(done), len(mutants))
+            except BaseException:
+                # Not wait for the queued mutants: end the workers (their sandboxes die with
+                # them, bubblewrap's --die-with-parent) before the folder is removed.
+                for process in list((getattr(pool, "_processes", None) or {}).values()):
+                    process.terminate()
+                pool.shutdown(wait=True, cancel_futures=True)
+                raise
+            pool.shutdown(wait=True)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
     return done
 
 
@@ -270,11 +323,13 @@ def format_table(table: dict[str, dict]) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m tools.mutation", description=__doc__.split("\n\n")[0])
     parser.add_argument("--exercise", action="append", default=None,
-                        help="only this exercise's mutants (repeatable): momentum, grid, quadtree, sat, contacts, "
-                             "impulse")
+                        help="only this exercise's mutants (repeatable): " + ", ".join(EXERCISES))
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--limit", type=int, default=None, help="grade only every k-th mutant so that about N run")
     parser.add_argument("--out", default="out/mutation")
+    parser.add_argument("--every-test", action="store_true",
+                        help="grade each mutant by every graded test, not only those that can see its module "
+                             "(slower; the same scores, which this checks)")
     parser.add_argument("--rescore", action="store_true",
                         help="print the scores of DIR/mutation.json again (after editing the equivalent list)")
     args = parser.parse_args(argv)
@@ -300,7 +355,11 @@ def main(argv: list[str] | None = None) -> int:
         if done % 25 == 0 or done == total:
             print(f"  {done}/{total} graded ({time.perf_counter() - started:.0f} s)", flush=True)
 
-    graded = run_mutants(mutants, args.jobs, progress)
+    try:
+        graded = run_mutants(mutants, args.jobs, progress, every_test=args.every_test)
+    except KeyboardInterrupt:
+        print("interrupted: nothing graded is kept (the workers and their folders are gone)", file=sys.stderr)
+        return 130
     record(session, graded)
     equivalent = equivalent_mutants()
     table = scores(graded, equivalent)

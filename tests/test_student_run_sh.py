@@ -3,8 +3,8 @@
 Python, pip and Jupyter are stand-ins so that no package is downloaded: a fake
 ``python3`` makes a stub virtual environment whose ``bin/python`` runs this
 interpreter except for ``-m pip`` and ``-m ipykernel`` (which print what pip prints and
-exit with ``FAKE_PIP_STATUS``; ``-m grader.student.notebook`` does nothing), and whose
-``bin/jupyter`` prints its arguments.  A fake
+exit with ``FAKE_PIP_STATUS``; ``-m grader.student.*``, the kernel spec's rewrite and the
+venv's trim, does nothing), and whose ``bin/jupyter`` prints its arguments.  A fake
 ``id`` answers ``id -u`` with ``FAKE_UID``, so the root and non-root cases both run
 whoever runs the tests.
 """
@@ -28,7 +28,7 @@ STUB_PYTHON = """#!/bin/sh
 echo "$*" >> "$(dirname "$0")/../calls.log"
 if [ "$1" = -m ] && [ "$2" = pip ]; then printf '%s\\n' "$PIP_CHATTER"; exit "${FAKE_PIP_STATUS:-0}"; fi
 if [ "$1" = -m ] && [ "$2" = ipykernel ]; then echo "Installed kernelspec"; exit 0; fi
-if [ "$1" = -m ] && [ "$2" = grader.student.notebook ]; then exit 0; fi
+case "$1 $2" in "-m grader.student."*) exit 0 ;; esac
 exec REAL "$@"
 """
 STUB_JUPYTER = """#!/bin/sh

@@ -67,9 +67,9 @@ setup() {
                quiet_pip install --no-compile -e . &&
                # The setuptools that Python 3.11's venv adds is never used (pip builds in isolation).
                quiet_pip uninstall --yes setuptools &&
-               # The libraries' own test suites (numpy's, sympy's, matplotlib's ...) never run here.
-               find "$("$PY" -c 'import sysconfig; print(sysconfig.get_path("purelib"))')" -mindepth 2 \
-                   -type d -name tests -prune -exec rm -rf {} + &&
+               # Files no one reads (the libraries' test suites, babel's non-English locales ...):
+               # the list, with the reason for each, is in grader/student/venv_trim.py.
+               "$PY" -m grader.student.venv_trim &&
                "$PY" -m ipykernel install --sys-prefix --name "$KERNEL" --display-name "$KERNEL_DISPLAY_NAME" &&
                "$PY" -m grader.student.notebook quiet-kernel "$VENV/share/jupyter/kernels/$KERNEL/kernel.json" &&
                # The chapters' stored outputs (the reference engine's) shown as trusted in JupyterLab.

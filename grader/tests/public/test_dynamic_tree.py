@@ -72,7 +72,7 @@ def check_pair_search(student) -> None:
     only the nodes a body's box meets.  Counted, not timed: on a few thousand boxes the
     library's numpy brute force takes no longer than the tree."""
     boxes = sparse_scene(SEARCH_SCENE, 3)
-    answer = student.call(READS_MODULE, "pairs_reads", boxes, MARGIN)
+    answer = student.call_once(READS_MODULE, "pairs_reads", boxes, MARGIN)  # asked by three tests
     reads = answer.get("reads") if isinstance(answer, dict) else None
     if not isinstance(reads, int):
         fail(f"{WHO}: pairs_reads should return {{'pairs': [...], 'reads': int}}, got {show(answer)[:200]}")
@@ -98,7 +98,7 @@ def check_sibling_search(student) -> None:
     centres, halves = rng.uniform(0, world, (20, 2)), rng.uniform(0.05, 1.0, (20, 2))
     queries = np.hstack([centres - halves, centres + halves])
     try:
-        reads = student.call(READS_MODULE, "sibling_reads", boxes, queries, MARGIN)
+        reads = student.call_once(READS_MODULE, "sibling_reads", boxes, queries, MARGIN)  # by two tests
     except StudentCallFailed as exc:
         if exc.outcome.status != "timeout":
             raise
@@ -201,6 +201,32 @@ def check_structures(student, cases: list[tuple], label: str) -> None:
                  f"{problem}")
 
 
+#: Bodies 0 and 1 side by side, body 2 far to the right, body 3 far to the left: inserted in
+#: this order, body 3's least-cost sibling is the root (adds 64.8 m of perimeter; the pair of
+#: bodies 0 and 1 adds 86.8 m, body 2 104.8 m), of height 2 with children of heights 1
+#: (bodies 0 and 1) and 0 (body 2).  Derived by hand from the docstrings.
+ROTATION_BOXES = [[0, 0, 1, 1], [1, 0, 2, 1], [10, 0, 11, 1], [-20, 0, -19, 1]]
+
+
+def check_rotation(student) -> None:
+    """The new parent is balanced too: pairing body 3 with the root of height 2 makes a new
+    root whose children's heights are 2 and 0, which :meth:`balance` rotates (the old root
+    comes up, body 2 goes down beside body 3): the tree's height stays 2."""
+    answer = student.call(MODULE, "tree_structure", np.array(ROTATION_BOXES, dtype=float), MARGIN)
+    problem = well_formed(answer) or (None if answer["nodes"] else "the tree is empty")
+    if problem is not None:
+        fail(f"{WHO}: tree_structure(aabbs={describe_boxes(np.array(ROTATION_BOXES))}) returned "
+             f"{show(answer)[:300]}: {problem}")
+    height = answer["nodes"][0].get("height")
+    if height != 2:
+        fail(f"{WHO}: after inserting {describe_boxes(np.array(ROTATION_BOXES))} in this order (margin {MARGIN:g}) "
+             f"the root has height {show(height)}, should be 2.  Body 3's least-cost sibling is the root (height 2, "
+             "its children of heights 1 and 0), so the new parent of the root and body 3 has children of heights "
+             "2 and 0, and balance, called on every node from the new parent up, rotates there: the old root "
+             "comes up and body 2 goes down beside body 3.  Give the new parent its height (1 + its children's "
+             "larger) before balance reads it, and start the walk up at the new parent itself.")
+
+
 def check_siblings(student, cases: list[tuple], label: str) -> None:
     """``sibling_choice(boxes, box, margin)`` picks a node of least cost."""
     answers = student.call_many(MODULE, "sibling_choice", cases)
@@ -286,6 +312,7 @@ def test_structure(student):
         moves = boxes + np.tile(rng.uniform(-0.15, 0.15, (40, 2)), 2) if k >= 2 else None
         cases.append((boxes, MARGIN, removed, moves))
     check_structures(student, cases, "small trees")
+    check_rotation(student)
 
 
 @pytest.mark.points(2)

@@ -40,17 +40,22 @@ from __future__ import annotations
 import copy
 import itertools
 import math
+import sys
 from functools import lru_cache
 from types import SimpleNamespace
 
 import numpy as np
 import sympy as sp
 
-from . import plain
+from . import derivation_cache, plain
 
 __all__ = ["derived", "relative_normal_velocity", "relative_tangent_velocity", "effective_mass_inverse",
            "normal_impulse", "apply_impulse", "resolve_collision", "correct_positions", "OracleError",
            "response_matrix", "show_body", "show_contact", "kinetic_energy", "momenta"]
+
+
+#: What the kept derivation depends on besides this file's text (grader.oracles.derivation_cache).
+DERIVATION_VERSIONS = (sys.version, sp.__version__)
 
 
 class OracleError(ValueError):
@@ -67,7 +72,17 @@ def derived() -> SimpleNamespace:
 
     Returns a namespace of plain-float functions (argument order in each docstring of
     this module's wrappers) and the sympy expressions themselves (``expressions``).
+    sympy's work (about 3 s) is done once per version of this file, of Python and of
+    sympy: its expressions are kept in ``__pycache__`` (:mod:`.derivation_cache`).
     """
+    forms = derivation_cache.cached(__file__, "derived", _derive, DERIVATION_VERSIONS)
+    functions = {name: sp.lambdify(arguments, expression, "math") for name, (arguments, expression) in forms.items()}
+    return SimpleNamespace(**functions, expressions=SimpleNamespace(
+        **{name: expression for name, (_, expression) in forms.items() if name != "v_t"}))
+
+
+def _derive() -> dict[str, tuple[tuple, object]]:
+    """Each closed form by name: (its arguments, the sympy expression) (see :func:`derived`)."""
     ma, mb, ia, ib = sp.symbols("m_A m_B I_A I_B", positive=True)
     ima, imb, iia, iib = sp.symbols("invm_A invm_B invI_A invI_B", nonnegative=True)
     vax, vay, wa, vbx, vby, wb = sp.symbols("v_Ax v_Ay w_A v_Bx v_By w_B", real=True)
@@ -134,19 +149,16 @@ def derived() -> SimpleNamespace:
     masses = (ima, imb, iia, iib)
     arms = (rax, ray, rbx, rby)
     normal = (nx, ny)
-    lam = sp.lambdify
-    return SimpleNamespace(
-        v_n=lam((*before_state, *arms, *normal), v_n, "math"),
-        v_t=lam((*before_state, *arms, *normal), v_t, "math"),
-        k=lam((*masses, *arms, *normal), k, "math"),
-        j=lam((*masses, *before_state, *arms, *normal, e), j_solution, "math"),
-        j_t=lam((*masses, *before_state, *arms, *normal), jt_solution, "math"),
-        after=lam((*masses, *before_state, *arms, px, py), after, "math"),
-        coupling=lam((*masses, *arms, *r2, *normal), coupling, "math"),
-        correction=lam((ima, imb, nx, ny, excess, percent), c_solution, "math"),
-        expressions=SimpleNamespace(v_n=v_n, k=k, j=j_solution, j_t=jt_solution, after=after,
-                                    coupling=coupling, correction=c_solution),
-    )
+    return {
+        "v_n": ((*before_state, *arms, *normal), v_n),
+        "v_t": ((*before_state, *arms, *normal), v_t),
+        "k": ((*masses, *arms, *normal), k),
+        "j": ((*masses, *before_state, *arms, *normal, e), j_solution),
+        "j_t": ((*masses, *before_state, *arms, *normal), jt_solution),
+        "after": ((*masses, *before_state, *arms, px, py), after),
+        "coupling": ((*masses, *arms, *r2, *normal), coupling),
+        "correction": ((ima, imb, nx, ny, excess, percent), c_solution),
+    }
 
 
 # Plain-dict wrappers --------------------------------------------------------------------

@@ -87,7 +87,7 @@ case "$command" in
         "$PY" -m tools.book check
         # --dist loadgroup: the book's tests share one build on one worker.
         # COURSE_RELEASE_VENV=1: the student edition's set-up command is run into a fresh
-        # venv (tests/test_release.py; it downloads the pinned packages once, then pip's cache).
+        # venv (tests/test_student_fresh_venv.py; it downloads the pinned packages once, then pip's cache).
         COURSE_RELEASE_VENV="${COURSE_RELEASE_VENV:-1}" \
             "$PY" -m pytest -n 2 --dist loadgroup --doctest-modules solutions tools tests "$@"
         ;;

@@ -7,11 +7,11 @@ student edition's venv (``du -sm .venv``, MiB): 353 after setup before these tri
 
 Kept on purpose, measured and judged:
 
-- Bytecode.  Python caches the modules it imports (``__pycache__``, about 45 MiB once
-  every chapter has run, 16 of them sympy's).  Without the cache a kernel compiles
-  numpy, matplotlib and sympy again on every start: 9-11 s instead of 3-4 s for the
-  first cell of a chapter that imports sympy.  Nothing is compiled ahead either
-  (``pip install --no-compile``): only what is used gets cached.
+- Bytecode.  Python caches the modules it imports (``__pycache__``, about 53 MiB once
+  every chapter has run and JupyterLab was used, 16 of them sympy's).  Without the
+  cache a kernel compiles numpy, matplotlib and sympy again on every start: a chapter's
+  first imports take 8.8-11.4 s instead of 2.7-3.8 s.  Nothing is compiled ahead
+  either (``pip install --no-compile``): only what is used gets cached.
 - pip (7 MiB): ``setup`` needs it again when a corrected release changes a pin.
 - typeshed's standard-library stubs (jedi, 5 MiB): JupyterLab's completion reads them.
 

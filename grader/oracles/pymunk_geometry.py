@@ -23,6 +23,9 @@ their midpoint).  Units: m.
 """
 from __future__ import annotations
 
+import copy
+import json
+
 import numpy as np
 import pymunk
 
@@ -57,6 +60,28 @@ def _collide(pm_a: pymunk.Shape, pm_b: pymunk.Shape):
     return result if result.points else None
 
 
+#: pymunk's answers already found, by question and the two shapes' JSON text: the graded
+#: tests draw their cases from fixed seeds, so every submission of a batch brings the same
+#: ones, and an answer is a function of the two shapes alone.  Only the trusted process
+#: that computed an answer reads it; the student's code never reaches this dictionary.
+_ANSWERS: dict[tuple[str, str], object] = {}
+#: Answers kept at most (then the dictionary starts again empty).
+ANSWERS_KEPT = 50_000
+
+
+def _remembered(question, a: dict, b: dict):
+    """``question(a, b)``, computed once per pair of shapes (a copy of the answer each time)."""
+    try:
+        key = (question.__name__, json.dumps([a, b], sort_keys=True))  # floats as repr: exact
+    except (TypeError, ValueError):   # numpy arrays and the like: not remembered
+        return question(a, b)
+    if key not in _ANSWERS:
+        if len(_ANSWERS) >= ANSWERS_KEPT:
+            _ANSWERS.clear()
+        _ANSWERS[key] = question(a, b)
+    return copy.deepcopy(_ANSWERS[key])
+
+
 def pymunk_contact(a: dict, b: dict) -> dict | None:
     """pymunk's contact between plain shapes A and B in the course's conventions, or None.
 
@@ -64,6 +89,10 @@ def pymunk_contact(a: dict, b: dict) -> dict | None:
     depth of the deepest point and one midpoint per pymunk point, plus ``"depths"``,
     the depth at each point (m).
     """
+    return _remembered(_contact, a, b)
+
+
+def _contact(a: dict, b: dict) -> dict | None:
     result = _collide(to_pymunk(a), to_pymunk(b))
     if result is None:
         return None
@@ -86,6 +115,10 @@ def pymunk_overlap(a: dict, b: dict) -> bool:
 def definite_overlap(a: dict, b: dict) -> bool | None:
     """pymunk's yes/no answer, or None when the shapes are within :data:`AMBIGUITY` of
     touching (apart by less, or overlapping by less)."""
+    return _remembered(_definite_overlap, a, b)
+
+
+def _definite_overlap(a: dict, b: dict) -> bool | None:
     contact = pymunk_contact(a, b)
     if contact is not None:
         return True if contact["depth"] > AMBIGUITY else None

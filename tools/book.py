@@ -318,8 +318,14 @@ def setup(quiet: bool = False) -> None:
 
 # ------------------------------------------------------------------------------ build
 
-def build(out: Path | None = None, verbose: bool = False, source: Path = BOOK) -> Path:
-    """A clean, strict build of ``source``; returns the path of the HTML ``index.html``."""
+def build(out: Path | None = None, verbose: bool = False, source: Path = BOOK, stored_outputs: bool = False) -> Path:
+    """A clean, strict build of ``source``; returns the path of the HTML ``index.html``.
+
+    Every chapter is executed (``execute_notebooks: force``) unless ``stored_outputs``:
+    then a chapter whose code cells are those of its ``.ipynb`` shows the outputs stored
+    there, and only the others are executed.  The test suite builds so, since its nbval
+    run executes every chapter afresh and compares the stored outputs (``check`` that the
+    cells are the ``.md``'s; :mod:`tools.nbval_stderr` that no fresh cell writes stderr)."""
     setup(quiet=True)
     jupyter_book = Path(sys.executable).with_name("jupyter-book")
     command = [str(jupyter_book if jupyter_book.exists() else "jupyter-book"),
@@ -328,12 +334,15 @@ def build(out: Path | None = None, verbose: bool = False, source: Path = BOOK) -
         command.append("--quiet")
     if out is not None:
         command += ["--path-output", str(out)]
-    command.append(str(source))
     build_dir = (Path(out) if out is not None else Path(source)) / "_build"
     shutil.rmtree(build_dir / "html", ignore_errors=True)
     shutil.rmtree(build_dir / ".doctrees", ignore_errors=True)
-    start = time.perf_counter()
-    result = subprocess.run(command, env=kernel_environment(), cwd=ROOT)
+    with tempfile.TemporaryDirectory(prefix="book-outputs-") as folder:
+        if stored_outputs:
+            command += ["--config", str(stored_outputs_config(source, Path(folder)))]
+        command.append(str(source))
+        start = time.perf_counter()
+        result = subprocess.run(command, env=kernel_environment(), cwd=ROOT)
     if result.returncode != 0:
         raise BookError(f"the book build failed (exit {result.returncode}): see the warnings above")
     index = build_dir / "html" / "index.html"
@@ -341,6 +350,24 @@ def build(out: Path | None = None, verbose: bool = False, source: Path = BOOK) -
         raise BookError(f"the build wrote no {index}")
     log(f"built the book in {time.perf_counter() - start:.1f} s: open {index}")
     return index
+
+
+def stored_outputs_config(source: Path, folder: Path) -> Path:
+    """``source``'s ``_config.yml`` written in ``folder``, reading the outputs of a
+    jupyter-cache made there from the chapters' ``.ipynb`` (myst-nb's ``cache`` mode: a
+    chapter matches its cached notebook when its code cells and kernel are the same)."""
+    import yaml
+    from jupyter_cache import get_cache
+
+    cache = folder / "jupyter_cache"
+    cached = get_cache(str(cache))
+    for ipynb in sorted((source / "chapters").glob("*.ipynb")):
+        cached.cache_notebook_file(str(ipynb), check_validity=False)
+    config = yaml.safe_load((source / "_config.yml").read_text(encoding="utf-8"))
+    config["execute"].update(execute_notebooks="cache", cache=str(cache))
+    path = folder / "_config.yml"
+    path.write_text(yaml.safe_dump(config, sort_keys=False), encoding="utf-8")
+    return path
 
 
 def partial_book(names: list[str]) -> Path:
@@ -365,7 +392,7 @@ def nbval_command(names: list[str] | None = None, extra: list[str] | None = None
     """The pytest command of a strict nbval run on the chapters' ``.ipynb``."""
     notebooks = [str(md.with_suffix(".ipynb")) for md in chapter_sources(names)]
     return [sys.executable, "-m", "pytest", "--nbval", "--nbval-sanitize-with", str(SANITIZE),
-            "--nbval-cell-timeout", str(CELL_TIMEOUT), "-p", "no:cacheprovider",
+            "--nbval-cell-timeout", str(CELL_TIMEOUT), "-p", "no:cacheprovider", "-p", "tools.nbval_stderr",
             "-q", *(extra or []), *notebooks]
 
 

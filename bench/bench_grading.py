@@ -42,7 +42,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
-sys.path.insert(0, str(HERE))
+sys.path[:0] = [str(HERE), str(REPO)]
 
 from cgroup_cpu import CpuMeter  # noqa: E402
 
@@ -87,6 +87,21 @@ def scores(out: Path) -> dict[str, tuple[float, float]]:
     with open(out / "gradebook.csv", newline="") as handle:
         return {row["submission"]: (float(row["score"] or 0), float(row["max_score"] or 0))
                 for row in csv.DictReader(handle)}
+
+
+def cpu_inflation(runs: int = 9) -> float:
+    """How many processor seconds a second of an idle machine's work takes now: other jobs on
+    the same cores (caches, switches) make each do less.  The fixed work of
+    :func:`grader.batch.calibration.reference_work` timed in processor time (fastest of
+    ``runs``) over its idle wall-clock figure."""
+    from grader.batch.calibration import NOMINAL_SECONDS, reference_work
+
+    best = float("inf")
+    for _ in range(runs):
+        started = time.process_time()
+        reference_work()
+        best = min(best, time.process_time() - started)
+    return best / NOMINAL_SECONDS
 
 
 def verdict(met: bool) -> str:
@@ -145,11 +160,16 @@ def run(scratch: Path, meter: CpuMeter, count: int, slope: int, jobs: int) -> No
         wall, processor, _ = grade(meter, [submission], scratch / f"out-{name}")
         print(f"  {name:10s} {wall:6.2f} s wall clock, {processor:6.2f} s of processor time")
 
+    inflation = cpu_inflation()
     per, startup, copies = per_submission(meter, scratch, slope)
+    inflation = (inflation + cpu_inflation()) / 2
     print(f"\nthe reference, every public and hidden test, per submission: `grader grade` on 1 and on {slope} "
           f"copies, --jobs 1 (goal: at most {GOAL_PROCESSOR_SECONDS:g} s of processor time)\n"
           f"  {per:6.2f} s per submission   {verdict(per <= GOAL_PROCESSOR_SECONDS)}\n"
-          f"  {startup:6.2f} s once per run (start, imports, test collection, workers' start)")
+          f"  {startup:6.2f} s once per run (start, imports, test collection, workers' start)\n"
+          f"  a processor second does {1 / inflation:.2f} of an idle machine's work now "
+          f"(grader.batch.calibration's work in processor time): about {per / inflation:.2f} s per submission "
+          "on an idle machine")
 
     started = time.perf_counter()
     processor = meter.run([sys.executable, "-m", "grader", "similarity", *map(str, copies), "--out",

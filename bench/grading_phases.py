@@ -183,6 +183,7 @@ def grade_one(submission: Submission, tests, meter, scratch: Path) -> dict:
 def phase_split(paths: list[Path], meter, scratch: Path) -> dict:
     """The phases of the last of ``paths`` (the others warm the process up)."""
     meter.enter()
+    scratch.mkdir(parents=True, exist_ok=True)
     tests = load_spec()
     found = {}
     for number, path in enumerate(paths):

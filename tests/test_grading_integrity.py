@@ -193,11 +193,11 @@ def test_a_systematic_bug_loses_at_least_half_of_its_functions_points(tmp_path, 
 
 
 # The solver exercise's answers: expressions of at least this many operations in the
-# solution blocks of its five functions, compared by shape (every name, attribute or
+# solution blocks of its six functions, compared by shape (every name, attribute or
 # subscript the same), so that a vectorised or renamed copy is found too.
 SOLVER_ANSWER_OPERATIONS = 5
 SOLVER_EXERCISE = {"solver/contact_point.py": ("apply_normal_impulse", "apply_friction_impulse"),
-                   "solver/contact_sweeps.py": ("prestep_point", "contact_target", "sweep_contacts")}
+                   "solver/contact_sweeps.py": ("prestep_point", "contact_target", "sweep_contacts", "step_bodies")}
 OPERATIONS = (ast.BinOp, ast.Compare, ast.Call, ast.IfExp, ast.UnaryOp)
 
 

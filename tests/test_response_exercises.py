@@ -22,7 +22,7 @@ STUBBED = {
                                    "apply_impulse", "resolve_collision"},
     "exercises.response.positional_correction": {"correct_positions"},
     "exercises.solver.contact_point": {"apply_normal_impulse", "apply_friction_impulse"},
-    "exercises.solver.contact_sweeps": {"prestep_point", "contact_target", "sweep_contacts"},
+    "exercises.solver.contact_sweeps": {"prestep_point", "contact_target", "sweep_contacts", "step_bodies"},
 }
 
 

@@ -1,16 +1,17 @@
 """Small worlds of upright boxes and discs on a flat ground, stepped with a contact
-solver's three functions (the solver exercise: ``prestep_point``, ``contact_target``,
-``sweep_contacts``), written here without the reference engine.
+solver's functions (the solver exercise: ``prestep_point`` and ``sweep_contacts``, or
+``step_bodies`` for the whole step), written here without the reference engine.
 
 The narrow phase is exact for these shapes: a disc touches the ground (the line y = 0,
 normal (0, 1) from the ground to the body) at one point below its centre, an upright box
 at its two bottom corners, a box resting on the box below it at the two ends of the
 shorter of their faces (the stack's boxes share x).  A contact exists while the overlap
-is >= 0.  Each step: gravity into the velocities, the prestep of every point, its target
-from the closing speed before any impulse, the sweeps with the impulses of the last
-step's points (same manifold, same point: warm starting), then ``x += h v`` and
-``angle += h w``.  Body 0 is the static ground.  The functions are called in one batch
-per function and step through ``call_many(name, cases) -> results``.  SI units.
+is >= 0.  Each step (:func:`step_scene`): gravity into the velocities, the prestep of
+every point, the sweeps (their targets from the closing speed before any impulse, then
+the warm start with the impulses of the last step's points: same manifold, same point),
+then ``x += h v`` and ``angle += h w``; or all of it by ``step_bodies``
+(:func:`step_scene_whole`).  Body 0 is the static ground.  The functions are called in
+one batch per function and step through ``call_many(name, cases) -> results``.  SI units.
 """
 from __future__ import annotations
 
@@ -92,54 +93,72 @@ def manifolds_of(bodies: list[Upright], stacked: bool) -> list[tuple[int, int, l
     return found
 
 
-def step_scene(bodies: list[Upright], call_many, settings: SceneSettings, memory: dict,
-               stacked: bool = False) -> list:
-    """One step; ``memory`` maps (a, b, point number) to last step's (normal, tangent)
-    impulses and is replaced.  Returns the manifolds as ``(a, b, normal totals)``."""
-    h = settings.dt
-    for body in bodies:
-        body.velocity[1] -= G * h
-    manifolds = manifolds_of(bodies, stacked)
-    centre = [(0.0, -1.0)] + [(b.x, b.y) for b in bodies]
-    inverse = [(0.0, 0.0)] + [(1.0 / b.mass, 0.0 if not b.turns else 1.0 / b.inertia) for b in bodies]
+def step_settings(settings: SceneSettings) -> list:
+    """The exercise's ``StepSettings`` fields: dt, iterations, restitution_threshold,
+    bias_factor, slop, max_push."""
+    return [settings.dt, settings.iterations, settings.restitution_threshold, settings.bias_factor, settings.slop,
+            settings.max_push]
+
+
+def scene_input(bodies: list[Upright], settings: SceneSettings, memory: dict, stacked: bool):
+    """The arguments of ``step_bodies`` for the scene: body rows ``(x, y, angle, vx, vy, w,
+    1/m, 1/I)`` with the ground first (its centre 1 m below the surface), the touching
+    pairs ``(a, b, normal, points, depths, friction, restitution, normal totals, tangent
+    totals)`` with last step's impulses from ``memory``, gravity and the settings."""
+    rows = [[0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]]
+    rows += [[b.x, b.y, b.angle, *b.velocity, 1.0 / b.mass, 1.0 / b.inertia if b.turns else 0.0] for b in bodies]
     material = [(settings.ground_friction, settings.ground_restitution)] + [(b.friction, b.restitution)
                                                                             for b in bodies]
-    cases, owners = [], []
-    for a, b, points, depths in manifolds:
-        for k, point in enumerate(points):
-            cases.append((list(point), [0.0, 1.0], list(centre[a]), list(centre[b]), inverse[a][0], inverse[b][0],
-                          inverse[a][1], inverse[b][1], material[a][0] * material[b][0]))
-            owners.append((a, b, k, depths[k]))
-    rows = call_many("prestep_point", cases) if cases else []
-    velocity = [[0.0, 0.0, 0.0]] + [list(b.velocity) for b in bodies]
-    target_cases = []
-    for row, (a, b, k, depth) in zip(rows, owners):
-        va, vb = velocity[a], velocity[b]
-        closing = vb[1] - va[1] + vb[2] * row[3] - va[2] * row[2]
-        target_cases.append((closing, material[a][1] * material[b][1], depth, h, settings.restitution_threshold,
-                             settings.bias_factor, settings.slop, settings.max_push))
-    targets = call_many("contact_target", target_cases) if target_cases else []
-    sweep_input, first = [], 0
-    for a, b, points, _ in manifolds:
-        count = len(points)
-        remembered = [memory.get((a, b, k), (0.0, 0.0)) for k in range(count)]
-        sweep_input.append([a, b, rows[first:first + count], targets[first:first + count],
-                            [n for n, _ in remembered], [t for _, t in remembered]])
-        first += count
-    if sweep_input:
-        velocity, normal, tangent = call_many("sweep_contacts", [(velocity, sweep_input, settings.iterations)])[0]
+    pairs = []
+    for a, b, points, depths in manifolds_of(bodies, stacked):
+        remembered = [memory.get((a, b, k), (0.0, 0.0)) for k in range(len(points))]
+        pairs.append([a, b, [0.0, 1.0], [list(p) for p in points], list(depths), material[a][0] * material[b][0],
+                      material[a][1] * material[b][1], [n for n, _ in remembered], [t for _, t in remembered]])
+    return rows, pairs, [0.0, -G], step_settings(settings)
+
+
+def remember(bodies: list[Upright], pairs: list, moved: list, normal: list, tangent: list, memory: dict) -> list:
+    """Write ``moved`` rows back into the bodies and the impulses into ``memory``;
+    returns the manifolds as ``(a, b, normal totals)``."""
+    memory.clear()
+    for (a, b, *_), normals, tangents in zip(pairs, normal, tangent):
+        for k, (n, t) in enumerate(zip(normals, tangents)):
+            memory[a, b, k] = (n, t)
+    for body, (x, y, angle, vx, vy, w) in zip(bodies, moved[1:]):
+        body.x, body.y, body.angle, body.velocity = x, y, angle, [float(vx), float(vy), float(w)]
+    return [(a, b, list(normals)) for (a, b, *_), normals in zip(pairs, normal)]
+
+
+def step_scene(bodies: list[Upright], call_many, settings: SceneSettings, memory: dict,
+               stacked: bool = False) -> list:
+    """One step, written here around ``prestep_point`` and ``sweep_contacts``; ``memory``
+    maps (a, b, point number) to last step's (normal, tangent) impulses and is replaced.
+    Returns the manifolds as ``(a, b, normal totals)``."""
+    rows, pairs, (gx, gy), constants = scene_input(bodies, settings, memory, stacked)
+    h = settings.dt
+    velocity = [[vx + h * gx, vy + h * gy, w] if ima > 0.0 else [vx, vy, w] for _, _, _, vx, vy, w, ima, _ in rows]
+    cases = [(point, normal, rows[a][:2], rows[b][:2], rows[a][6], rows[b][6], rows[a][7], rows[b][7], friction)
+             for a, b, normal, points, _, friction, *_ in pairs for point in points]
+    points = call_many("prestep_point", cases) if cases else []
+    manifolds, first = [], 0
+    for a, b, _, found, depths, _, restitution, normal_total, tangent_total in pairs:
+        manifolds.append([a, b, points[first:first + len(found)], restitution, depths, normal_total, tangent_total])
+        first += len(found)
+    if manifolds:
+        velocity, normal, tangent = call_many("sweep_contacts", [(velocity, manifolds, constants)])[0]
     else:
         normal, tangent = [], []
-    memory.clear()
-    for (a, b, points, _), normals, tangents in zip(manifolds, normal, tangent):
-        for k in range(len(points)):
-            memory[a, b, k] = (normals[k], tangents[k])
-    for body, v in zip(bodies, velocity[1:]):
-        body.velocity = [float(x) for x in v]
-        body.x += h * body.velocity[0]
-        body.y += h * body.velocity[1]
-        body.angle += h * body.velocity[2]
-    return [(a, b, list(normals)) for (a, b, _, _), normals in zip(manifolds, normal)]
+    moved = [[x + h * v[0], y + h * v[1], angle + h * v[2], *v] for (x, y, angle, *_), v in zip(rows, velocity)]
+    return remember(bodies, pairs, moved, normal, tangent, memory)
+
+
+def step_scene_whole(bodies: list[Upright], call_many, settings: SceneSettings, memory: dict,
+                     stacked: bool = False) -> list:
+    """One step by ``step_bodies`` alone (gravity, prestep, sweeps and positions are the
+    function's); otherwise as :func:`step_scene`."""
+    rows, pairs, gravity, constants = scene_input(bodies, settings, memory, stacked)
+    moved, normal, tangent = call_many("step_bodies", [(rows, pairs, gravity, constants)])[0]
+    return remember(bodies, pairs, moved, normal, tangent, memory)
 
 
 def overlaps(bodies: list[Upright], stacked: bool = False) -> list[float]:

@@ -1,19 +1,25 @@
-"""The contact solver a student writes: the prestep of a contact point and the sweeps
-with warm starting (box2d-lite's ``Arbiter::PreStep`` and ``Arbiter::ApplyImpulse``
-with the loop of ``World::Step`` around them).
+"""The contact solver a student writes: the prestep of a contact point, the sweeps with
+warm starting and the step around them (box2d-lite's ``Arbiter::PreStep`` and
+``Arbiter::ApplyImpulse`` with its ``World::Step``).
 
-Three functions, called by :class:`solutions.response.sweep_solver.SweepContactSolver`
-on every step, one after the other:
+Four functions, each calling the ones before it:
 
 1. :func:`prestep_point`: what a contact point's rows need and that does not change
    during the sweeps (its lever arms and effective masses), as a
    :class:`~solutions.solver.contact_point.ContactPoint`;
 2. :func:`contact_target`: the separating normal velocity the point's normal row aims
    at: a bounce for a fast impact, a push for an overlap, else 0;
-3. :func:`sweep_contacts`: the warm start (last step's impulses given again) and the
-   Gauss-Seidel sweeps over the manifolds, whose visits are
+3. :func:`sweep_contacts`: every point's target, from the velocities the sweeps start
+   from; the warm start (last step's impulses given again); then the Gauss-Seidel
+   sweeps over the manifolds, whose visits are
    :func:`~solutions.solver.contact_point.apply_friction_impulse` and
-   :func:`~solutions.solver.contact_point.apply_normal_impulse`.
+   :func:`~solutions.solver.contact_point.apply_normal_impulse`;
+4. :func:`step_bodies`: one step of bodies whose contacts were found at the start of
+   it: gravity, the prestep, the sweeps, the new positions.
+
+:class:`solutions.response.sweep_solver.SweepContactSolver` calls the first and the
+third on the engine's contacts; :class:`solutions.response.sweep_solver.SweepWorld`
+steps a whole world with the fourth.
 
 Conventions: SI units; the normal ``n`` is a unit vector from body A to body B and the
 tangent is ``t = (n_y, -n_x)``; an impulse along ``n`` (or ``t``) is given to B and
@@ -27,20 +33,69 @@ from typing import NamedTuple
 from .contact_point import ContactPoint, apply_friction_impulse, apply_normal_impulse
 
 
+class StepSettings(NamedTuple):
+    """The constants of a step: ``dt`` (s, > 0), ``iterations`` (sweeps, >= 0), and those
+    of :func:`contact_target`: ``restitution_threshold`` (m/s), ``bias_factor``
+    (dimensionless; 0: no push), ``slop`` (m), ``max_push`` (m/s)."""
+
+    dt: float = 1 / 60
+    iterations: int = 10
+    restitution_threshold: float = 1.0
+    bias_factor: float = 0.0
+    slop: float = 0.005
+    max_push: float = 3.0
+
+
 class ManifoldRows(NamedTuple):
     """One contact manifold as the sweeps see it (what :func:`sweep_contacts` takes).
 
     ``a``, ``b``: rows of the bodies in the velocity list (``n`` points from A to B);
     ``points``: its one or two :class:`ContactPoint` (from :func:`prestep_point`);
-    ``targets``: the wanted separating velocity of each point (m/s, from
-    :func:`contact_target`); ``normal_total``, ``tangent_total``: each point's
-    accumulated impulses remembered from the last step (N s, 0 for a new point).
+    ``restitution``: the pair's coefficient e; ``depths``: each point's overlap (m, > 0
+    overlapping); ``normal_total``, ``tangent_total``: each point's accumulated
+    impulses remembered from the last step (N s, 0 for a new point).
     """
 
     a: int
     b: int
     points: list
-    targets: list
+    restitution: float
+    depths: list
+    normal_total: list
+    tangent_total: list
+
+
+class BodyRow(NamedTuple):
+    """One body as :func:`step_bodies` sees it: its centre of mass ``x``, ``y`` (m) and
+    ``angle`` (rad), its velocity ``vx``, ``vy`` (m/s), ``w`` (rad/s), its inverse mass
+    ``ima`` (1/kg; 0 for a static body, which gravity does not move) and inverse moment
+    of inertia ``iia`` (1/(kg m^2); 0 for a body that cannot turn)."""
+
+    x: float
+    y: float
+    angle: float
+    vx: float
+    vy: float
+    w: float
+    ima: float
+    iia: float
+
+
+class TouchingPair(NamedTuple):
+    """One contact manifold as the narrow phase found it at the start of the step, with
+    what the solver adds: bodies ``a``, ``b`` (rows of the body list), the unit
+    ``normal`` from A to B, the one or two contact ``points`` (m) and their ``depths``
+    (m, > 0 overlapping), the pair's ``friction`` mu and ``restitution`` e, and each
+    point's impulses remembered from the last step, ``normal_total`` and
+    ``tangent_total`` (N s, 0 for a new point)."""
+
+    a: int
+    b: int
+    normal: tuple
+    points: list
+    depths: list
+    friction: float
+    restitution: float
     normal_total: list
     tangent_total: list
 
@@ -153,16 +208,19 @@ def contact_target(normal_velocity: float, restitution: float, depth: float, dt:
     ### END SOLUTION
 
 
-def sweep_contacts(velocity, manifolds, iterations: int):
-    """Warm start, then ``iterations`` sweeps of sequential impulses over ``manifolds``.
+def sweep_contacts(velocity, manifolds, settings: StepSettings):
+    """The targets, the warm start, then ``settings.iterations`` sweeps of sequential
+    impulses over ``manifolds``.
 
-    Warm starting: each point's remembered impulses (``normal_total`` along ``n`` and
-    ``tangent_total`` along ``t``, from the last step) are given to its bodies again
-    before the first sweep, and the accumulated totals start from them.  A sweep visits
-    the manifolds in the given order; in each manifold first every point's friction row
-    (:func:`apply_friction_impulse`), then every point's normal row
-    (:func:`apply_normal_impulse`, aiming at the point's target), each visit seeing the
-    velocities the visits before it left.
+    The target of each point (:func:`contact_target`: a bounce, a push or 0) is set once,
+    from the velocities as given (after this step's forces, before any impulse of this
+    step), and kept through the sweeps.  Warm starting: each point's remembered impulses
+    (``normal_total`` along ``n`` and ``tangent_total`` along ``t``, from the last step)
+    are given to its bodies again before the first sweep, and the accumulated totals
+    start from them.  A sweep visits the manifolds in the given order; in each manifold
+    first every point's friction row (:func:`apply_friction_impulse`), then every
+    point's normal row (:func:`apply_normal_impulse`, aiming at the point's target),
+    each visit seeing the velocities the visits before it left.
 
     Parameters
     ----------
@@ -170,9 +228,9 @@ def sweep_contacts(velocity, manifolds, iterations: int):
         ``(vx, vy, w)`` of every body (m/s, rad/s); a static body has inverse mass and
         inertia 0 in every point, so it never changes.
     manifolds : list of ManifoldRows
-        Or sequences of its six fields in that order.
-    iterations : int
-        Sweeps (>= 0).
+        Or sequences of its seven fields in that order.
+    settings : StepSettings
+        Or a sequence of its six fields in that order.
 
     Returns
     -------
@@ -184,23 +242,43 @@ def sweep_contacts(velocity, manifolds, iterations: int):
     Examples
     --------
     A 1 kg disc (body 1, radius 0.5 m) falling at 2 m/s onto static ground (body 0),
-    nothing remembered: one sweep stops it with 2 N s.
+    nothing remembered: one sweep stops it with 2 N s (closing slower than the
+    restitution threshold of 1 m/s, it does not bounce).
 
     >>> disc = prestep_point((0.0, 0.0), (0.0, 1.0), (0.0, -0.5), (0.0, 0.5), 0.0, 1.0, 0.0, 8.0, 0.5)
-    >>> sweep_contacts([(0.0, 0.0, 0.0), (0.0, -2.0, 0.0)], [ManifoldRows(0, 1, [disc], [0.0], [0.0], [0.0])], 1)
+    >>> one_sweep = StepSettings(iterations=1, restitution_threshold=3.0)
+    >>> sweep_contacts([(0.0, 0.0, 0.0), (0.0, -2.0, 0.0)], [ManifoldRows(0, 1, [disc], 0.5, [0.0], [0.0], [0.0])],
+    ...                one_sweep)
     ([(0.0, 0.0, 0.0), (0.0, 0.0, 0.0)], [[2.0]], [[0.0]])
+
+    With e = 0.5 above a threshold of 1 m/s it leaves at 1 m/s, after one sweep as after
+    ten: the target is set before the sweeps.
+
+    >>> bouncy = [ManifoldRows(0, 1, [disc], 0.5, [0.0], [0.0], [0.0])]
+    >>> [sweep_contacts([(0.0, 0.0, 0.0), (0.0, -2.0, 0.0)], bouncy, StepSettings(iterations=n))[0][1] for n in (1, 10)]
+    [(0.0, 1.0, 0.0), (0.0, 1.0, 0.0)]
 
     The same disc remembering 2 N s: the warm start alone stops it, and with no sweep
     the total stays.
 
-    >>> sweep_contacts([(0.0, 0.0, 0.0), (0.0, -2.0, 0.0)], [ManifoldRows(0, 1, [disc], [0.0], [2.0], [0.0])], 0)
+    >>> sweep_contacts([(0.0, 0.0, 0.0), (0.0, -2.0, 0.0)], [ManifoldRows(0, 1, [disc], 0.0, [0.0], [2.0], [0.0])],
+    ...                StepSettings(iterations=0))
     ([(0.0, 0.0, 0.0), (0.0, 0.0, 0.0)], [[2.0]], [[0.0]])
     """
     ### BEGIN SOLUTION
+    dt, iterations, threshold, bias_factor, slop, max_push = settings
     velocity = [tuple(v) for v in velocity]
-    normal = [list(m[4]) for m in manifolds]
-    tangent = [list(m[5]) for m in manifolds]
-    for m, (a, b, points, _, _, _) in enumerate(manifolds):
+    normal = [list(m[5]) for m in manifolds]
+    tangent = [list(m[6]) for m in manifolds]
+    targets = []
+    for a, b, points, restitution, depths, _, _ in manifolds:
+        (vxa, vya, wa), (vxb, vyb, wb) = velocity[a], velocity[b]
+        targets.append([])
+        for point, depth in zip(points, depths):
+            normal_velocity = (vxb - vxa) * point[0] + (vyb - vya) * point[1] + wb * point[3] - wa * point[2]
+            targets[-1].append(contact_target(normal_velocity, restitution, depth, dt, threshold, bias_factor, slop,
+                                              max_push))
+    for m, (a, b, points, _, _, _, _) in enumerate(manifolds):
         for k, point in enumerate(points):
             nx, ny, rn_a, rn_b, rt_a, rt_b, ima, imb, iia, iib = point[:10]
             pn, pt = normal[m][k], tangent[m][k]
@@ -210,12 +288,76 @@ def sweep_contacts(velocity, manifolds, iterations: int):
             velocity[a] = (vxa - ima * px, vya - ima * py, wa - iia * (rn_a * pn + rt_a * pt))
             velocity[b] = (vxb + imb * px, vyb + imb * py, wb + iib * (rn_b * pn + rt_b * pt))
     for _ in range(iterations):
-        for m, (a, b, points, targets, _, _) in enumerate(manifolds):
+        for m, (a, b, points, _, _, _, _) in enumerate(manifolds):
             for k, point in enumerate(points):
                 velocity[a], velocity[b], tangent[m][k] = apply_friction_impulse(
                     velocity[a], velocity[b], point, normal[m][k], tangent[m][k])
             for k, point in enumerate(points):
                 velocity[a], velocity[b], normal[m][k] = apply_normal_impulse(
-                    velocity[a], velocity[b], point, normal[m][k], targets[k])
+                    velocity[a], velocity[b], point, normal[m][k], targets[m][k])
     return velocity, normal, tangent
+    ### END SOLUTION
+
+
+def step_bodies(bodies, pairs, gravity, settings: StepSettings):
+    """One step of ``settings.dt`` of the bodies, whose contacts ``pairs`` were found at
+    the poses they start from, in the order of box2d-lite's ``World::Step``.
+
+    Contract: gravity changes the velocity of every body with mass (``ima > 0``); the
+    contacts then correct those velocities (each pair's points through
+    :func:`prestep_point`, all of them through :func:`sweep_contacts`); and only then
+    do the bodies move, each by ``dt`` times its corrected velocity (``angle`` by ``dt``
+    times ``w``).  So a body resting on the ground neither sinks nor lifts, a body
+    touching nothing falls freely, and the remembered impulses warm start the sweeps.
+
+    Parameters
+    ----------
+    bodies : list of BodyRow
+        Or sequences of its eight fields in that order.
+    pairs : list of TouchingPair
+        Or sequences of its nine fields in that order; their ``a`` and ``b`` are rows of
+        ``bodies``, and the sweeps visit them in this order.
+    gravity : (float, float)
+        m/s^2.
+    settings : StepSettings
+        Or a sequence of its six fields in that order.
+
+    Returns
+    -------
+    (list, list, list)
+        Every body's new ``(x, y, angle, vx, vy, w)``, and per pair the list of its
+        points' accumulated normal impulses and the list of their accumulated friction
+        impulses (N s), to remember for the next step.  The arguments are not changed.
+
+    Examples
+    --------
+    A 1 kg disc of radius 0.5 m (1/I = 8) resting on static ground, at 10 m/s^2 and a
+    step of 0.1 s: gravity makes it close at 1 m/s, 1 N s stops it, and it stays where
+    it is.  The ground is body 0, its centre 0.5 m below the surface.
+
+    >>> ground, disc = BodyRow(0.0, -0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0), BodyRow(0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 1.0, 8.0)
+    >>> resting = TouchingPair(0, 1, (0.0, 1.0), [(0.0, 0.0)], [0.0], 0.5, 0.0, [0.0], [0.0])
+    >>> step_bodies([ground, disc], [resting], (0.0, -10.0), StepSettings(dt=0.1, restitution_threshold=2.0))
+    ([(0.0, -0.5, 0.0, 0.0, 0.0, 0.0), (0.0, 0.5, 0.0, 0.0, 0.0, 0.0)], [[1.0]], [[0.0]])
+
+    Touching nothing, it falls at 1 m/s after the step and has moved 0.1 m down.
+
+    >>> step_bodies([disc], [], (0.0, -10.0), StepSettings(dt=0.1))
+    ([(0.0, 0.4, 0.0, 0.0, -1.0, 0.0)], [], [])
+    """
+    ### BEGIN SOLUTION
+    dt = settings[0]
+    gx, gy = gravity
+    velocity = [(vx + dt * gx, vy + dt * gy, w) if ima > 0.0 else (vx, vy, w)
+                for _, _, _, vx, vy, w, ima, _ in bodies]
+    manifolds = []
+    for a, b, normal, points, depths, friction, restitution, normal_total, tangent_total in pairs:
+        xa, ya, _, _, _, _, ima, iia = bodies[a]
+        xb, yb, _, _, _, _, imb, iib = bodies[b]
+        rows = [prestep_point(point, normal, (xa, ya), (xb, yb), ima, imb, iia, iib, friction) for point in points]
+        manifolds.append(ManifoldRows(a, b, rows, restitution, depths, normal_total, tangent_total))
+    velocity, normal, tangent = sweep_contacts(velocity, manifolds, settings)
+    moved = [(x + dt * vx, y + dt * vy, angle + dt * w, vx, vy, w)
+             for (x, y, angle, *_), (vx, vy, w) in zip(bodies, velocity)]
+    return moved, normal, tangent
     ### END SOLUTION

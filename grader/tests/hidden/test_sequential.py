@@ -14,6 +14,11 @@ and the boxes stay at rest.  The chain's rigid distance joints are rows of the s
 kernel with ``lower = -inf``: joint k, counted from the ceiling, pulls with the weight
 of the ``chain - k`` boxes below it, ``-(chain - k) m g dt`` per step (an impulse along
 the joint's direction, ceiling to box, is negative when it pulls).
+
+The prestep, sweeps and step (``solver/contact_sweeps.py``) are compared with the
+reference on random cases, and two worlds, a tall box landing and a pyramid, are
+stepped here by :class:`~solutions.response.sweep_solver.SweepWorld`, whose step after
+the contact search is the student's ``step_bodies`` called through the sandbox.
 """
 from __future__ import annotations
 
@@ -27,14 +32,15 @@ from grader.oracles import upright_scenes as scenes
 from grader.sandbox.codec import is_number
 from grader.tests.public.test_sequential import (SWEEPS, answer_problem, describe, follow_targets, landing_ball,
                                                  point_problem, prestep_cases, random_cases, random_joint_rows,
-                                                 random_sweep_cases, random_targets, scene_calls, sweep_problem)
+                                                 random_step_cases, random_sweep_cases, random_targets, scene_calls,
+                                                 step_problem, sweep_problem)
 from solutions.body import Body
 from solutions import joints as joint_solver
 from solutions.contact import Contact
 from solutions.joints import DistanceJoint, JointSolver
 from solutions.response import contact_solver
 from solutions.response.contact_solver import ContactSolver, SolverSettings
-from solutions.response.sweep_solver import SweepContactSolver
+from solutions.response.sweep_solver import SweepWorld
 from solutions.scenes import pyramid
 from solutions.solver import contact_sweeps
 from solutions.solver.contact_point import apply_friction_impulse, apply_normal_impulse
@@ -202,27 +208,27 @@ def test_stack_of_ten(student, monkeypatch):
 # The prestep and the sweeps, against the reference and in the engine's world -----------
 @pytest.mark.points(1)
 @pytest.mark.visibility("hidden")
-@pytest.mark.title("Prestep and sweeps: random points, targets and manifolds against the reference")
+@pytest.mark.title("Prestep, sweeps and step: random points, targets, manifolds and bodies against the reference")
 def test_prestep_and_sweeps_against_reference(student):
     for function, cases, problem in (
-            ("prestep_point", prestep_cases(911, 40), lambda got, want: point_problem(got, list(want))),
+            ("prestep_point", prestep_cases(911, 40), lambda got, want, _: point_problem(got, list(want))),
             ("contact_target", random_targets(912, 60),
-             lambda got, want: None if isinstance(got, (int, float)) and abs(got - want) <= 1e-9 * (1 + abs(want))
+             lambda got, want, _: None if isinstance(got, (int, float)) and abs(got - want) <= 1e-9 * (1 + abs(want))
              else f"the target is {show(got)}, {want!r} expected"),
             ("sweep_contacts", random_sweep_cases(913, 30),
-             lambda got, want: sweep_problem(got, [[list(v) for v in want[0]], want[1], want[2]]))):
+             lambda got, want, _: sweep_problem(got, [[list(v) for v in want[0]], want[1], want[2]])),
+            ("step_bodies", random_step_cases(914, 30), lambda got, _, args: step_problem(got, args))):
         answers = student.call_many(SWEEPS, function, [list(args) for args, _ in cases])
         reference = getattr(contact_sweeps, function)
-        check_cases(list(zip(cases, answers)), lambda ca: problem(ca[1], reference(*ca[0][0])), f"random {function}",
-                    category=lambda ca: ca[0][1])
+        check_cases(list(zip(cases, answers)), lambda ca: problem(ca[1], reference(*ca[0][0]), ca[0][0]),
+                    f"random {function}", category=lambda ca: ca[0][1])
 
 
 def world_with(student, bodies, scene: str, **settings) -> World:
-    """A plain-step world whose contact solver's prestep and sweeps are the student's."""
-    solver_settings = SolverSettings(block_solver=False, **settings)
-    world = World(bodies, WorldSettings(solver=solver_settings))
-    world.solver = SweepContactSolver(solver_settings, scene_calls(student, scene))
-    return world
+    """A plain-step world whose step after the contact search is the student's
+    step_bodies (with their prestep and sweeps), called from here through the sandbox."""
+    return SweepWorld(bodies, WorldSettings(solver=SolverSettings(block_solver=False, **settings)),
+                      scene_calls(student, scene))
 
 
 def tall_box(velocity_y: float = -3.0) -> list[Body]:
@@ -232,12 +238,12 @@ def tall_box(velocity_y: float = -3.0) -> list[Body]:
 
 @pytest.mark.points(2)
 @pytest.mark.visibility("hidden")
-@pytest.mark.title("World: a tall box landing flat at 3 m/s stops upright, as the reference's sweeps stop it")
+@pytest.mark.title("World, your step: a tall box landing flat at 3 m/s stops upright, as the reference's "
+                   "step stops it")
 def test_tall_box_landing(student):
     scene = "the tall box (0.4 x 3 m) landing flat at 3 m/s"
     world = world_with(student, tall_box(), scene)
-    reference = World(tall_box(), WorldSettings(solver=SolverSettings(block_solver=False)))
-    reference.solver = SweepContactSolver(SolverSettings(block_solver=False))
+    reference = SweepWorld(tall_box(), WorldSettings(solver=SolverSettings(block_solver=False)))
     for step in range(30):
         world.step(DT)
         reference.step(DT)
@@ -245,14 +251,14 @@ def test_tall_box_landing(student):
         want = np.array([*reference.bodies[1].position, reference.bodies[1].angle])
         if not np.allclose(got, want, atol=1e-6):
             fail(f"{scene}, step {step + 1}: the box is at (x, y, angle) = {np.round(got, 5).tolist()}, the "
-                 f"reference's sweeps put it at {np.round(want, 5).tolist()}")
+                 f"reference's step puts it at {np.round(want, 5).tolist()}")
     angle = abs(float(world.bodies[1].angle))
     assert angle < 0.01, f"{scene}: it turned by {angle:.4f} rad (the reference: 0.004 rad)"
 
 
 @pytest.mark.points(2)
 @pytest.mark.visibility("hidden")
-@pytest.mark.title("World: a pyramid of five rows stands for 1 s with your prestep and sweeps (engine contacts)")
+@pytest.mark.title("World, your step: a pyramid of five rows stands for 1 s (engine contacts)")
 def test_pyramid_stands(student):
     scene = "the pyramid of five rows"
     bodies = pyramid(5)

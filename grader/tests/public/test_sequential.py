@@ -11,6 +11,12 @@ its target (normal) or to 0 (friction); clamping keeps the *accumulated* impulse
 pull) or ``[-mu P, mu P]`` (friction, Coulomb).  Small cases are
 worked out by hand in the comments.  Every returned value is compared: both bodies'
 ``(vx, vy, w)`` and the new accumulated impulse.
+
+The prestep, targets, sweeps and step (solver/contact_sweeps.py) are compared with the
+same expressions on cases, then graded by scenes of upright bodies
+(:mod:`grader.oracles.upright_scenes`) stepped here, in the trusted process, with the
+student's functions called through the sandbox: around ``prestep_point`` and
+``sweep_contacts``, or by ``step_bodies`` alone.
 """
 from __future__ import annotations
 
@@ -365,34 +371,42 @@ def test_contact_target(student):
                 category=lambda ca: ca[0][1])
 
 
-def expected_sweeps(velocity, manifolds, iterations):
-    """Warm start, then per sweep and manifold every friction visit, then every normal
+def expected_sweeps(velocity, manifolds, settings):
+    """Every point's target from the velocities as given (before the warm start), the
+    warm start, then per sweep and manifold every friction visit, then every normal
     visit (the visits of this module's expected_friction / expected_normal)."""
+    dt, iterations, threshold, bias_factor, slop, max_push = settings
+    constants = scenes.SceneSettings(dt=dt, restitution_threshold=threshold, bias_factor=bias_factor, slop=slop,
+                                     max_push=max_push)
     velocity = [list(v) for v in velocity]
-    normal = [list(m[4]) for m in manifolds]
-    tangent = [list(m[5]) for m in manifolds]
-    _, _, response = row_algebra()
-    for m, (a, b, points, _, _, _) in enumerate(manifolds):
+    normal = [list(m[5]) for m in manifolds]
+    tangent = [list(m[6]) for m in manifolds]
+    _, row_velocity, response = row_algebra()
+    targets = [[scenes.target_speed(row_velocity(*point[:4], *velocity[a], *velocity[b]), restitution, depth,
+                                    constants) for point, depth in zip(points, depths)]
+               for a, b, points, restitution, depths, _, _ in manifolds]
+    for m, (a, b, points, *_) in enumerate(manifolds):
         for k, point in enumerate(points):
             nx, ny, rn_a, rn_b, rt_a, rt_b, ima, imb, iia, iib = point[:10]
             dn = response(nx, ny, rn_a, rn_b, ima, imb, iia, iib)
-            dt = response(ny, -nx, rt_a, rt_b, ima, imb, iia, iib)
-            change = [normal[m][k] * x + tangent[m][k] * y for x, y in zip(dn, dt)]
+            dt_ = response(ny, -nx, rt_a, rt_b, ima, imb, iia, iib)
+            change = [normal[m][k] * x + tangent[m][k] * y for x, y in zip(dn, dt_)]
             velocity[a] = list(np.add(velocity[a], change[:3]))
             velocity[b] = list(np.add(velocity[b], change[3:]))
     for _ in range(iterations):
-        for m, (a, b, points, targets, _, _) in enumerate(manifolds):
+        for m, (a, b, points, *_) in enumerate(manifolds):
             for k, point in enumerate(points):
                 velocity[a], velocity[b], tangent[m][k] = expected_friction(velocity[a], velocity[b], point,
                                                                             normal[m][k], tangent[m][k])
             for k, point in enumerate(points):
                 velocity[a], velocity[b], normal[m][k] = expected_normal(velocity[a], velocity[b], point,
-                                                                         normal[m][k], targets[k])
+                                                                         normal[m][k], targets[m][k])
     return velocity, normal, tangent
 
 
 def random_sweep_cases(seed: int, count: int) -> list[tuple]:
-    """Three bodies (0 static), two or three manifolds of one or two points each."""
+    """Three bodies (0 static), two or three manifolds of one or two points each; bounces
+    (thresholds from 0.2 m/s) and, in every other case, pushes out of the overlaps."""
     rng = np.random.default_rng(seed)
     cases = []
     for index in range(count):
@@ -405,10 +419,12 @@ def random_sweep_cases(seed: int, count: int) -> list[tuple]:
             points = [point_of(math.cos(angle), math.sin(angle), *[float(x) for x in rng.uniform(-0.6, 0.6, 4)],
                                inverse[a][0], inverse[b][0], inverse[a][1], inverse[b][1],
                                float(rng.uniform(0.0, 1.0))) for _ in range(count_points)]
-            manifolds.append([a, b, points, [float(x) for x in rng.uniform(0.0, 0.5, count_points)],
+            manifolds.append([a, b, points, float(rng.uniform(0.0, 1.0)),
+                              [float(x) for x in rng.uniform(0.0, 0.05, count_points)],
                               [float(x) for x in rng.uniform(0.0, 0.3, count_points)],
                               [float(x) for x in rng.uniform(-0.1, 0.1, count_points)]])
-        cases.append(((velocity, manifolds, int(rng.integers(0, 5))), "warm started"))
+        settings = [1 / 60, int(rng.integers(0, 5)), float(rng.uniform(0.2, 1.5)), 0.2 * (index % 2), 0.005, 3.0]
+        cases.append(((velocity, manifolds, settings), "warm started, pushed" if index % 2 else "warm started"))
     return cases
 
 
@@ -438,14 +454,24 @@ def sweep_problem(got, want) -> str | None:
 
 @pytest.mark.points(2)
 @pytest.mark.partial_credit
-@pytest.mark.title("Sweeps: warm start, then friction and normal visits manifold by manifold (random manifolds)")
+@pytest.mark.title("Sweeps: targets, warm start, then friction and normal visits manifold by manifold "
+                   "(random manifolds)")
 def test_sweep_contacts(student):
     # A disc falling at 2 m/s, remembering 2 N s: the warm start alone stops it.
     disc = point_of(0.0, 1.0, 0.0, 0.0, 0.0, 0.5, 0.0, 1.0, 0.0, 8.0, 0.5)
-    cases = [(([[0.0, 0.0, 0.0], [0.0, -2.0, 0.0]], [[0, 1, [disc], [0.0], [2.0], [0.0]]], 0),
-              "warm start only"),
-             (([[0.0, 0.0, 0.0], [0.0, -2.0, 0.0]], [[0, 1, [disc], [0.0], [0.0], [0.0]]], 1), "one sweep"),
-             (([[0.0, 0.0, 0.0], [1.0, -2.0, 0.0]], [[0, 1, [disc], [0.5], [0.0], [0.3]]], 3),
+    falling = [[0.0, 0.0, 0.0], [0.0, -2.0, 0.0]]
+
+    def settings(iterations, threshold=1.0, bias_factor=0.0):
+        return [1 / 60, iterations, threshold, bias_factor, 0.005, 3.0]
+
+    cases = [((falling, [[0, 1, [disc], 0.0, [0.0], [2.0], [0.0]]], settings(0)), "warm start only"),
+             ((falling, [[0, 1, [disc], 0.0, [0.0], [0.0], [0.0]]], settings(1)), "one sweep"),
+             # e = 0.5 above the threshold: it leaves at 1 m/s, after one sweep as after two.
+             ((falling, [[0, 1, [disc], 0.5, [0.0], [0.0], [0.0]]], settings(1)), "a bounce, one sweep"),
+             ((falling, [[0, 1, [disc], 0.5, [0.0], [0.0], [0.0]]], settings(2)), "a bounce, two sweeps"),
+             # 2 cm deep: pushed out at 0.2 x 0.015 m / h = 0.18 m/s.
+             ((falling, [[0, 1, [disc], 0.0, [0.02], [0.0], [0.0]]], settings(3, bias_factor=0.2)), "a push"),
+             (([[0.0, 0.0, 0.0], [1.0, -2.0, 0.0]], [[0, 1, [disc], 0.5, [0.0], [0.0], [0.3]]], settings(3)),
               "sliding, bouncing, warm started")] + random_sweep_cases(813, 25)
     answers = student.call_many(SWEEPS, "sweep_contacts", [list(args) for args, _ in cases])
 
@@ -456,8 +482,132 @@ def test_sweep_contacts(student):
 
     check_cases(list(zip(cases, answers)), problem_of, "sweeps",
                 describe=lambda ca: describe_call("sweep_contacts", ca[0][0], ("velocity", "manifolds",
-                                                                               "iterations")),
+                                                                               "settings")),
                 category=lambda ca: ca[0][1])
+
+
+# The step (step_bodies) ----------------------------------------------------------------
+STEP_FIELDS = ("bodies", "pairs", "gravity", "settings")
+POSE_NAMES = ("x", "y", "angle", "vx", "vy", "w")
+
+
+def gravity_applied(bodies, gravity, dt) -> list[list[float]]:
+    """Every body's velocity after gravity: bodies with mass (1/m > 0) only."""
+    return [[vx + dt * gravity[0], vy + dt * gravity[1], w] if ima > 0.0 else [vx, vy, w]
+            for _, _, _, vx, vy, w, ima, _ in bodies]
+
+
+def moved_by(bodies, velocity, dt) -> list[list[float]]:
+    return [[x + dt * v[0], y + dt * v[1], angle + dt * v[2], *v] for (x, y, angle, *_), v in zip(bodies, velocity)]
+
+
+def expected_step(bodies, pairs, gravity, settings):
+    """Gravity, the prestep of every point, the sweeps (targets first), then the positions
+    moved with the velocities the sweeps leave (this module's expected_* functions)."""
+    dt = settings[0]
+    velocity = gravity_applied(bodies, gravity, dt)
+    manifolds = [[a, b, [expected_prestep(point, normal, bodies[a][:2], bodies[b][:2], bodies[a][6], bodies[b][6],
+                                          bodies[a][7], bodies[b][7], friction) for point in points],
+                  restitution, depths, normal_total, tangent_total]
+                 for a, b, normal, points, depths, friction, restitution, normal_total, tangent_total in pairs]
+    velocity, normal, tangent = expected_sweeps(velocity, manifolds, settings)
+    return moved_by(bodies, velocity, dt), normal, tangent
+
+
+def step_problem(got, args) -> str | None:
+    """What is wrong with ``got``, step_bodies' answer to ``args``; a body moved with the
+    velocities before the sweeps is named as such."""
+    bodies, pairs, gravity, settings = args
+    want = expected_step(*args)
+    if not (isinstance(got, list) and len(got) == 3 and isinstance(got[0], list) and len(got[0]) == len(bodies)
+            and all(isinstance(row, list) and len(row) == 6 for row in got[0])):
+        return (f"step_bodies must return ({len(bodies)} rows (x, y, angle, vx, vy, w), normal totals, tangent "
+                f"totals), got {show(got)[:300]}")
+    problem = sweep_problem([[row[3:] for row in got[0]], got[1], got[2]],
+                            [[row[3:] for row in want[0]], want[1], want[2]])
+    if problem:
+        return f"after the sweeps: {problem}"
+    unsolved = moved_by(bodies, gravity_applied(bodies, gravity, settings[0]), settings[0])
+    for i, (row, wanted, early) in enumerate(zip(got[0], want[0], unsolved)):
+        for name, x, y, z in list(zip(POSE_NAMES, row, wanted, early))[:3]:
+            if number(f"{name} of body {i}", x, y, rtol=1e-7, atol=1e-7):
+                hint = ("it moved with its velocity before the contacts were solved (after gravity only); a body "
+                        "moves with the velocity the sweeps leave" if abs(x - z) <= 1e-9 * (1 + abs(z))
+                        else "x, y and angle move by dt times the new vx, vy and w")
+                return f"{name} of body {i} is {x:.9g}, {y:.9g} expected: {hint}"
+    return None
+
+
+def random_step_cases(seed: int, count: int) -> list[tuple]:
+    """The static ground (body 0) and two or three bodies with mass, some that cannot
+    turn, in one to three touching pairs of one or two points, warm started."""
+    rng = np.random.default_rng(seed)
+    cases = []
+    for index in range(count):
+        moving = 2 + index % 2
+        bodies = [[0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]]
+        for _ in range(moving):
+            turns = rng.random() < 0.7
+            bodies.append([*(float(x) for x in rng.uniform(-2.0, 2.0, 2)), float(rng.uniform(-1.0, 1.0)),
+                           *(float(v) for v in rng.normal(0.0, 1.0, 3)), float(rng.uniform(0.2, 2.0)),
+                           float(rng.uniform(0.5, 6.0)) if turns else 0.0])
+            if not turns:
+                bodies[-1][5] = 0.0
+        pairs = []
+        for a, b in [(0, 1), (1, 2), (0, 2), (2, 3)][:1 + index % 3 + (moving == 3)]:
+            angle = float(rng.uniform(0.0, 2 * math.pi))
+            count_points = 1 + int(rng.random() < 0.6)
+            pairs.append([a, b, [math.cos(angle), math.sin(angle)],
+                          [[float(x) for x in rng.uniform(-2.0, 2.0, 2)] for _ in range(count_points)],
+                          [float(x) for x in rng.uniform(0.0, 0.05, count_points)], float(rng.uniform(0.0, 1.0)),
+                          float(rng.uniform(0.0, 1.0)), [float(x) for x in rng.uniform(0.0, 0.3, count_points)],
+                          [float(x) for x in rng.uniform(-0.1, 0.1, count_points)]])
+        gravity = [0.0, -9.81] if index % 4 else [float(g) for g in rng.normal(0.0, 5.0, 2)]
+        settings = [float(rng.choice([1 / 60, 1 / 120])), int(rng.integers(0, 5)), float(rng.uniform(0.2, 1.5)),
+                    0.2 * (index % 2), 0.005, 3.0]
+        cases.append(((bodies, pairs, gravity, settings), "random bodies and pairs"))
+    return cases
+
+
+#: The ground (body 0, static, its centre 1 m below its surface y = 0) and a 1 kg disc of
+#: radius 0.5 m (1/I = 8) or a 1 kg box of 1 m that cannot turn, each on it.
+GROUND = [0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+STEP = [1 / 60, 10, 1.0, 0.2, 0.005, 3.0]
+STEP_CASES = [
+    # Resting: gravity makes the disc close at g h = 0.1635 m/s, m g h stops it, it stays.
+    (([GROUND, [0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 1.0, 8.0]], [[0, 1, [0.0, 1.0], [[0.0, 0.0]], [0.0], 0.5, 0.0, [0.0],
+                                                              [0.0]]], [0.0, -9.81], STEP), "a disc resting"),
+    # Touching nothing: it falls at g h after the step, and has moved h g h down.
+    (([GROUND, [0.0, 3.0, 0.0, 0.0, 0.0, 0.0, 1.0, 8.0]], [], [0.0, -9.81], STEP), "falling freely"),
+    # The box resting on its two corners, warm started with m g h / 2 each: nothing moves.
+    (([GROUND, [0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0]],
+      [[0, 1, [0.0, 1.0], [[-0.5, 0.0], [0.5, 0.0]], [0.0, 0.0], 0.5, 0.0, [9.81 / 120, 9.81 / 120], [0.0, 0.0]]],
+      [0.0, -9.81], STEP), "a box resting, warm started"),
+    # Landing at 3 m/s with e = 0.5: it leaves at 1.5 m/s and rises by h 1.5 m/s.
+    (([GROUND, [0.0, 0.5, 0.0, 0.0, -3.0 + 9.81 / 60, 0.0, 1.0, 8.0]],
+      [[0, 1, [0.0, 1.0], [[0.0, 0.0]], [0.0], 0.5, 0.5, [0.0], [0.0]]], [0.0, -9.81], STEP), "a bounce"),
+    # Sliding at 2 m/s, mu = 0.5: friction takes mu m g h off its speed.
+    (([GROUND, [0.0, 0.5, 0.0, 2.0, 0.0, 0.0, 1.0, 0.0]],
+      [[0, 1, [0.0, 1.0], [[-0.5, 0.0], [0.5, 0.0]], [0.0, 0.0], 0.5, 0.0, [0.0, 0.0], [0.0, 0.0]]],
+      [0.0, -9.81], STEP), "a box sliding"),
+]
+
+
+@pytest.mark.points(2)
+@pytest.mark.partial_credit
+@pytest.mark.title("Step: gravity, prestep, sweeps, then positions moved with the solved velocities (hand-worked "
+                   "and random bodies)")
+def test_step_bodies(student):
+    cases = STEP_CASES + random_step_cases(814, 25)
+    answers = student.call_many(SWEEPS, "step_bodies", [list(args) for args, _ in cases])
+
+    def problem_of(case_answer):
+        (args, note), got = case_answer
+        problem = step_problem(got, args)
+        return None if problem is None else f"{problem} [{note}]"
+
+    check_cases(list(zip(cases, answers)), problem_of, "steps",
+                describe=lambda ca: describe_call("step_bodies", ca[0][0], STEP_FIELDS), category=lambda ca: ca[0][1])
 
 
 def scene_calls(student, scene: str):
@@ -470,9 +620,12 @@ def scene_calls(student, scene: str):
                 ok = all(len(a) == len(FIELDS) and all(map(math.isfinite, a)) for a in answers)
             elif name == "contact_target":
                 ok = all(math.isfinite(a) for a in answers)
-            else:
-                velocity, normal, tangent = answers[0]
-                ok = (all(len(v) == 3 and all(map(math.isfinite, v)) for v in velocity)
+            else:       # sweep_contacts: velocities; step_bodies: poses and velocities
+                rows, normal, tangent = answers[0]
+                width = 6 if name == "step_bodies" else 3
+                ok = (len(rows) == len(cases[0][0]) and all(len(v) == width and all(map(math.isfinite, v))
+                                                             for v in rows)
+                      and len(normal) == len(tangent) == len(cases[0][1])
                       and all(all(map(math.isfinite, n)) for n in normal + tangent))
         except (TypeError, ValueError):
             ok = False
@@ -568,9 +721,40 @@ def test_bounce_whatever_the_sweeps(student):
         ball = scenes.Upright(1.0, radius=0.5, y=0.5, velocity=[0.0, -5.0 + scenes.G / 60, 0.0], restitution=0.8)
         scenes.step_scene([ball], scene_calls(student, "the bouncing ball"),
                           scenes.SceneSettings(iterations=iterations), {})
-        assert abs(ball.velocity[1] - 4.0) < 1e-9, (f"the ball hitting the ground at 5 m/s with e = 0.8 leaves at "
-                                                    f"{ball.velocity[1]:+.4f} m/s after {iterations} sweeps, "
-                                                    "+4 m/s expected (the target is fixed before the sweeps)")
+        assert abs(ball.velocity[1] - 4.0) < 1e-9, (
+            f"the ball hitting the ground at 5 m/s with e = 0.8 leaves at {ball.velocity[1]:+.4f} m/s after "
+            f"{iterations} sweeps, +4 m/s expected: the target is set once, from the velocity before any impulse; "
+            "measured again during the sweeps, it sees the bounce the first sweep made and asks for none")
+
+
+@pytest.mark.points(2)
+@pytest.mark.title("Scene, your step: a box resting on the ground and a ball dropped onto it rest within the slop "
+                   "(step_bodies, 2 s)")
+def test_step_rests_within_the_slop(student):
+    """Stepped by step_bodies alone: a 1 m box that cannot turn, resting on the ground,
+    and a ball dropped from 0.5 m (e = 0).  The push takes 20 % of an overlap beyond the
+    5 mm slop a step, so both rest with their overlaps within the slop.  A body moved
+    before its contact is solved sinks by g h^2 every step and rests where the push
+    balances that, 5 mm + g h^2 / 0.2 = 18.6 mm deep."""
+    scene = "the box resting on the ground and the ball dropped onto it"
+    bodies = [scenes.Upright(1.0, 0.5, 0.5, x=0.0, y=0.5, turns=False), scenes.Upright(1.0, radius=0.5, x=3.0, y=1.0)]
+    settings, memory, deepest = scenes.SceneSettings(), {}, [0.0, 0.0]
+    for step in range(120):
+        scenes.step_scene_whole(bodies, scene_calls(student, scene), settings, memory)
+        if step >= 60:
+            deepest = [max(d, o) for d, o in zip(deepest, scenes.overlaps(bodies))]
+    sink = scenes.G * settings.dt ** 2
+    balance = settings.slop + sink / settings.bias_factor      # where the push balances g h^2 a step
+    if max(deepest) > settings.slop + 1e-3:
+        why = (f" Both rest where a push of 20 % of the overlap beyond the slop balances a sinking of g h^2 = "
+               f"{sink * 1e3:.2f} mm a step, {balance * 1e3:.1f} mm deep: the bodies move before their contacts are "
+               "solved. The step is gravity, then the sweeps, then the positions, with the velocities the sweeps "
+               "leave." if all(abs(d - balance) < 1e-3 for d in deepest) else "")
+        fail(f"{scene}: in the second second the box overlaps the ground by up to {deepest[0] * 1e3:.2f} mm and the "
+             f"ball by {deepest[1] * 1e3:.2f} mm; resting, they stay within the slop, {settings.slop * 1e3:.0f} mm."
+             + why)
+    speed = max(abs(v) for body in bodies for v in body.velocity)
+    assert speed < 1e-3, f"{scene}: after 2 s a body still moves at {speed:.3g} m/s"
 
 
 

@@ -1,7 +1,7 @@
 """grader.oracles.derivation_cache: a derivation kept once per version of its module."""
 import pytest
 
-from grader.oracles.derivation_cache import cache_path, cached
+from grader.oracles.derivation_cache import cache_path, cached, sympy_versions
 
 
 @pytest.fixture
@@ -54,4 +54,12 @@ def test_the_impulse_oracle_keeps_its_derivation():
     from grader.oracles import impulse_sympy
 
     impulse_sympy.derived()
-    assert cache_path(impulse_sympy.__file__, "derived", impulse_sympy.DERIVATION_VERSIONS).exists()
+    assert cache_path(impulse_sympy.__file__, "derived", sympy_versions()).exists()
+
+
+def test_the_momentum_tests_keep_their_closed_forms():
+    from grader.tests.public import test_momentum
+
+    general, common = test_momentum.wall_forms()
+    assert cache_path(test_momentum.__file__, "wall_forms", sympy_versions()).exists()
+    assert general(0.0, 0.0, 1.0, -2.0, 1.0) == (0.0, 2.0) and common(1.0, 3.0, 1.0, 1.0) == 2.0   # a wall; equal masses

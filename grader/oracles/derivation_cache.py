@@ -16,10 +16,18 @@ import contextlib
 import hashlib
 import os
 import pickle
+import sys
 from pathlib import Path
 from typing import Callable, TypeVar
 
 T = TypeVar("T")
+
+
+def sympy_versions() -> tuple[str, str]:
+    """What a sympy derivation depends on besides its module's text: the versions of Python and sympy."""
+    import sympy
+
+    return sys.version, sympy.__version__
 
 
 def cache_path(module_file: str | os.PathLike, name: str, versions: tuple[str, ...]) -> Path:

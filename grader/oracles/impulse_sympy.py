@@ -40,7 +40,6 @@ from __future__ import annotations
 import copy
 import itertools
 import math
-import sys
 from functools import lru_cache
 from types import SimpleNamespace
 
@@ -52,10 +51,6 @@ from . import derivation_cache, plain
 __all__ = ["derived", "relative_normal_velocity", "relative_tangent_velocity", "effective_mass_inverse",
            "normal_impulse", "apply_impulse", "resolve_collision", "correct_positions", "OracleError",
            "response_matrix", "show_body", "show_contact", "kinetic_energy", "momenta"]
-
-
-#: What the kept derivation depends on besides this file's text (grader.oracles.derivation_cache).
-DERIVATION_VERSIONS = (sys.version, sp.__version__)
 
 
 class OracleError(ValueError):
@@ -75,7 +70,7 @@ def derived() -> SimpleNamespace:
     sympy's work (about 3 s) is done once per version of this file, of Python and of
     sympy: its expressions are kept in ``__pycache__`` (:mod:`.derivation_cache`).
     """
-    forms = derivation_cache.cached(__file__, "derived", _derive, DERIVATION_VERSIONS)
+    forms = derivation_cache.cached(__file__, "derived", _derive, derivation_cache.sympy_versions())
     functions = {name: sp.lambdify(arguments, expression, "math") for name, (arguments, expression) in forms.items()}
     return SimpleNamespace(**functions, expressions=SimpleNamespace(
         **{name: expression for name, (_, expression) in forms.items() if name != "v_t"}))

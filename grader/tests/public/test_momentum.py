@@ -9,10 +9,19 @@ import pytest
 import sympy as sp
 
 from grader.harness.compare import number, show
+from grader.oracles.derivation_cache import cached, sympy_versions
 from grader.harness.credit import check_cases
 
 MODULE = "response.momentum_1d"
 KMH = 1000 / 3600
+
+
+def lambdified(name: str, derive) -> tuple:
+    """The (general, common) forms of ``derive()`` (arguments and expression of each),
+    kept on disk once per version of this file (grader.oracles.derivation_cache: sympy's
+    solving costs seconds in every grading process), lambdified to plain-float functions."""
+    forms = cached(__file__, name, derive, sympy_versions())
+    return tuple(sp.lambdify(*forms[key], "math") for key in ("general", "common"))
 
 
 @lru_cache(maxsize=None)
@@ -21,12 +30,15 @@ def closed_forms():
 
     Momentum m1 v1 + m2 v2 = m1 u1 + m2 u2 and restitution u2 - u1 = -e (v2 - v1).
     """
+    return lambdified("closed_forms", derive_closed_forms)
+
+
+def derive_closed_forms() -> dict:
     m1, m2, v1, v2, u1, u2, e = sp.symbols("m1 m2 v1 v2 u1 u2 e", real=True)
     solution = sp.solve([sp.Eq(m1 * v1 + m2 * v2, m1 * u1 + m2 * u2), sp.Eq(u2 - u1, -e * (v2 - v1))], [u1, u2],
                         dict=True)[0]
-    general = sp.lambdify((m1, v1, m2, v2, e), (solution[u1], solution[u2]), "math")
-    common = sp.lambdify((m1, v1, m2, v2), sp.simplify(solution[u1].subs(e, 0)), "math")
-    return general, common
+    return {"general": ((m1, v1, m2, v2, e), (solution[u1], solution[u2])),
+            "common": ((m1, v1, m2, v2), sp.simplify(solution[u1].subs(e, 0)))}
 
 
 def random_cases(seed: int, count: int = 20, restitution: bool = False) -> list[tuple]:
@@ -82,15 +94,17 @@ def test_perfectly_inelastic(student):
 def wall_forms():
     """(v1', v2') and the common velocity with inverse masses w = 1/m, from the same
     sympy solution: w = 0 is an immovable wall (m = inf), where the forms in m give nan."""
+    return lambdified("wall_forms", derive_wall_forms)
+
+
+def derive_wall_forms() -> dict:
     w1, w2, v1, v2, e = sp.symbols("w1 w2 v1 v2 e", real=True)
     m1, m2, u1, u2 = sp.symbols("m1 m2 u1 u2", real=True)
     solution = sp.solve([sp.Eq(m1 * v1 + m2 * v2, m1 * u1 + m2 * u2), sp.Eq(u2 - u1, -e * (v2 - v1))], [u1, u2],
                         dict=True)[0]
     inverse = {m1: 1 / w1, m2: 1 / w2}
     after = tuple(sp.simplify(solution[u].subs(inverse)) for u in (u1, u2))
-    general = sp.lambdify((w1, v1, w2, v2, e), after, "math")
-    common = sp.lambdify((w1, v1, w2, v2), sp.simplify(after[0].subs(e, 0)), "math")
-    return general, common
+    return {"general": ((w1, v1, w2, v2, e), after), "common": ((w1, v1, w2, v2), sp.simplify(after[0].subs(e, 0)))}
 
 
 def inverse(mass: float) -> float:

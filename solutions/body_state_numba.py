@@ -1,4 +1,4 @@
-"""The bodies' integration compiled: twins of :meth:`BodyState.integrate_velocities` and :meth:`World.integrate_positions`.
+"""The bodies' state compiled: twins of :func:`~solutions.body_state.state_arrays`, :meth:`BodyState.integrate_velocities` and :meth:`World.integrate_positions`.
 
 Explicit (symplectic) Euler on the world's :class:`~solutions.body_state.BodyState`
 arrays, for the compiled soft step (:mod:`solutions.response.soft_step_numba`): the
@@ -14,7 +14,13 @@ from __future__ import annotations
 
 from numba import njit
 
+from . import body_state
 from .compiled_cache import forget_stale_machine_code
+
+#: :func:`solutions.body_state.state_arrays` compiled as it is (the views of a state's
+#: ``numbers``: position, angle, velocity, properties), for the compiled step to cut them
+#: from the one array it is called with.
+state_arrays = njit(inline="always")(body_state.state_arrays)
 
 
 @njit(cache=True, inline="always")

@@ -169,3 +169,24 @@ def test_bad_values_set_after_building_raise_and_change_nothing(change, error, m
     with pytest.raises(error, match=message):
         change(body)
     assert body.property_row().tolist() == before.tolist()
+
+
+def test_the_state_arrays_are_views_of_one_array_cut_alike_by_both_backends():
+    """The compiled step is called with the state's ``numbers`` alone and cuts the
+    position, angle, velocity and property arrays from it as the readable state does."""
+    from solutions.body_state import state_arrays
+    from solutions.body_state_numba import state_arrays as compiled_state_arrays
+    from numba import njit
+
+    world = get_scene("pyramid_10").build_world()
+    state = world.state
+    readable = (state.position, state.angle, state.velocity, state.properties)
+    for array, cut in zip(readable, state_arrays(state.numbers)):
+        assert np.shares_memory(array, state.numbers) and array.flags.c_contiguous
+        np.testing.assert_array_equal(array, cut)
+    compiled = njit(lambda numbers: compiled_state_arrays(numbers))(state.numbers)
+    for array, cut in zip(readable, compiled):
+        assert cut.shape == array.shape and np.shares_memory(cut, state.numbers)
+        np.testing.assert_array_equal(array, cut)
+    world.bodies[3].velocity = (1.0, -2.0)
+    assert compiled[2][3, :2].tolist() == [1.0, -2.0]

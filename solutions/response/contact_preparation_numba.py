@@ -55,6 +55,11 @@ def recall_impulses(pair_key, feature, px, py, old_key, old_feature, old_x, old_
             for q in range(lo, hi):          # the last old point with this key, as a dict keeps it
                 if old_feature[q] == feature[k]:
                     found[k] = q
+        missing = 0
+        for k in range(start, start + count):
+            missing += found[k] < 0
+        if missing == 0:        # (every point kept its feature, as in a resting pile: no nearest to look for)
+            continue
         left = 0
         for q in range(lo, hi):
             taken = False
@@ -86,19 +91,20 @@ def recall_impulses(pair_key, feature, px, py, old_key, old_feature, old_x, old_
 
 @njit(cache=True, inline="always")
 def separations(position, angle, a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, r_cross_n_a,
-                 r_cross_n_b, depth, cos_less_1, sin, out):
+                r_cross_n_b, depth, body_work, out):
     """``SoftStepSolver.separations``: each point's separation now, in manifold order
-    (``cos_less_1`` and ``sin``, one per body, are work space)."""
+    (``body_work``, (4, bodies), is work space: each body's cos - 1 and sin of its turn
+    and its move, made once per body rather than once per point)."""
+    cos_less_1, sin, moved_x, moved_y = body_work[0], body_work[1], body_work[2], body_work[3]
     for i in range(angle.shape[0]):
         turned = angle[i] - start_angle[i]
         cos_less_1[i], sin[i] = math.cos(turned) - 1.0, math.sin(turned)
+        moved_x[i], moved_y[i] = position[i, 0] - centre[i, 0], position[i, 1] - centre[i, 1]
     for k in range(a.shape[0]):
         i, j = a[k], b[k]
-        dx = (position[j, 0] - centre[j, 0]) - (position[i, 0] - centre[i, 0])
-        dy = (position[j, 1] - centre[j, 1]) - (position[i, 1] - centre[i, 1])
+        dx, dy = moved_x[j] - moved_x[i], moved_y[j] - moved_y[i]
         out[k] = (dx * nx[k] + dy * ny[k] + cos_less_1[j] * r_dot_n_b[k] + sin[j] * r_cross_n_b[k]
                   - cos_less_1[i] * r_dot_n_a[k] - sin[i] * r_cross_n_a[k] - depth[k])
-
 
 
 @njit(cache=True, inline="always")     # (returns views: inlined into soft_step_numba._step_on_pairs)
@@ -164,14 +170,15 @@ def prepare(keys, key_i, key_j, features, manifold_ints, manifold_floats, positi
 
     # The prestep.
     # Without rotation the contacts see no inertia and no angular velocity.
-    block, fi = take(work_floats, fi, 6 * n)
-    body_floats = block[:4 * n].reshape((4, n))
+    block, fi = take(work_floats, fi, 8 * n)
+    body_floats = block[:2 * n].reshape((2, n))
     body_floats[:] = 0.0
     contact_inertia = inverse_inertia if rotation else body_floats[0]
-    start_angle, body_cos_less_1, body_sin = body_floats[1], body_floats[2], body_floats[3]
+    start_angle = body_floats[1]
+    body_work = block[4 * n:].reshape((4, n))       # separations' work space
     for i in range(n):      # (loops, not slice copies: those may allocate, to guard against overlap)
         start_angle[i] = angle[i]
-    centre = block[4 * n:].reshape((n, 2))
+    centre = block[2 * n:4 * n].reshape((n, 2))
     for i in range(n):
         centre[i, 0], centre[i, 1] = position[i, 0], position[i, 1]
     column = points_in_order
@@ -295,8 +302,8 @@ def prepare(keys, key_i, key_j, features, manifold_ints, manifold_floats, positi
 
     points = (a, b, nx, ny, px, py, sep, pair_key, feature, ima, imb, iia, iib, rax, ray, rbx, rby, normal_velocity,
               restitution, normal_total, tangent_total, order, sweep_position)
-    contacts = (a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, rn_a, rn_b, depth, body_cos_less_1, body_sin,
-                separation, order)
+    contacts = (a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, rn_a, rn_b, depth, body_work, separation,
+                order)
     blocks = (groups, group_floats, rows, solution)
     soft_rows = (bias_rate, mass_scale_soft, impulse_scale_soft, max_normal)
     return points, contacts, blocks, soft_rows, static_members, warm_started, ii, fi

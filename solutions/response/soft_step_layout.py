@@ -107,7 +107,7 @@ def work_sizes(bodies, joints, pairs):
             + 3 * pairs + bodies + 2                             # the sweep order
             + 5 * pairs + bodies + 6 * joints                    # the kernel's groups, static bodies, joints
             + 2 * pairs + 2 * pairs)                             # the warm start's matching
-    floats = (30 * bodies + MANIFOLD_FLOATS * pairs + CLIPPING_FLOATS    # faces, AABBs, sweep, bodies; manifolds
+    floats = (32 * bodies + MANIFOLD_FLOATS * pairs + CLIPPING_FLOATS    # faces, AABBs, sweep, bodies; manifolds
               + 27 * 2 * pairs + 9 * pairs + (8 + 6 + 5) * 2 * pairs     # points, groups, rows
               + 25 * joints)
     return ints, floats

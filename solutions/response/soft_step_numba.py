@@ -81,7 +81,7 @@ from ..no_alias_compiler import NoAliasCompiler
 from ..narrowphase.circle_pairs_numba import CIRCLE_FEATURE, circle_manifolds
 from .contact_preparation_numba import prepare, separations
 from ..joints_numba import joint_rows, solve_joints
-from ..body_state_numba import integrate_positions, integrate_velocities
+from ..body_state_numba import integrate_positions, integrate_velocities, state_arrays
 
 
 @njit(cache=True, inline="always")
@@ -97,19 +97,26 @@ def _zero_static_velocities(velocity, static_members):
 def warm_start(velocity, a, b, nx, ny, ima, imb, iia, iib, rax, ray, rbx, rby, normal, tangent, sweep_position):
     """The accumulated impulses (``normal`` and ``tangent``, sweep order) applied again,
     points in manifold order, to all bodies A, then all bodies B (``SoftStepSolver.solve_substep``'s
-    ``apply_impulses``)."""
-    for k in range(a.shape[0]):
-        pn, pt = normal[sweep_position[k]], tangent[sweep_position[k]]
-        ix, iy = pn * nx[k] + pt * ny[k], pn * ny[k] + pt * (-nx[k])
-        velocity[a[k], 0] += -(ima[k] * ix)
-        velocity[a[k], 1] += -(ima[k] * iy)
-        velocity[a[k], 2] += -(iia[k] * (rax[k] * iy - ray[k] * ix))
-    for k in range(a.shape[0]):
-        pn, pt = normal[sweep_position[k]], tangent[sweep_position[k]]
-        ix, iy = pn * nx[k] + pt * ny[k], pn * ny[k] + pt * (-nx[k])
-        velocity[b[k], 0] += imb[k] * ix
-        velocity[b[k], 1] += imb[k] * iy
-        velocity[b[k], 2] += iib[k] * (rbx[k] * iy - rby[k] * ix)
+    ``apply_impulses``).  A body's velocity stays in locals over a run of points on it
+    (the same additions in the same order; through memory each waited for the last)."""
+    if a.shape[0] == 0:
+        return
+    for side in range(2):
+        body, sign = (a, -1.0) if side == 0 else (b, 1.0)
+        im, ii, rx, ry = (ima, iia, rax, ray) if side == 0 else (imb, iib, rbx, rby)
+        held = body[0]
+        vx, vy, w = velocity[held, 0], velocity[held, 1], velocity[held, 2]
+        for k in range(a.shape[0]):
+            if body[k] != held:
+                velocity[held, 0], velocity[held, 1], velocity[held, 2] = vx, vy, w
+                held = body[k]
+                vx, vy, w = velocity[held, 0], velocity[held, 1], velocity[held, 2]
+            pn, pt = normal[sweep_position[k]], tangent[sweep_position[k]]
+            ix, iy = pn * nx[k] + pt * ny[k], pn * ny[k] + pt * (-nx[k])
+            vx += sign * (im[k] * ix)
+            vy += sign * (im[k] * iy)
+            w += sign * (ii[k] * (rx[k] * iy - ry[k] * ix))
+        velocity[held, 0], velocity[held, 1], velocity[held, 2] = vx, vy, w
 
 
 @njit(cache=True, inline="always")
@@ -121,7 +128,7 @@ def solve_contacts(use_bias, separation_is_current, velocity, position, angle, h
     its separation over ``h`` (s).  ``separation_is_current``: the separations in
     ``contacts`` are those of the current poses (made again otherwise).  Returns
     whether they are current after this pass (the positions move after a biased one)."""
-    (a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, rn_a, rn_b, depth, cos_less_1, sin, separation,
+    (a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, rn_a, rn_b, depth, body_work, separation,
      order) = contacts
     groups, group_floats, rows, solution = blocks
     bias_rate, soft_mass_scale, soft_impulse_scale, max_normal = soft_rows
@@ -129,7 +136,7 @@ def solve_contacts(use_bias, separation_is_current, velocity, position, angle, h
     impulse_scale, normal = solution[SOLUTION_IMPULSE_SCALE], solution[SOLUTION_NORMAL]
     if not (use_bias and separation_is_current):
         separations(position, angle, a, b, nx, ny, centre, start_angle, r_dot_n_a, r_dot_n_b, rn_a, rn_b, depth,
-                    cos_less_1, sin, separation)
+                    body_work, separation)
     for r in range(order.shape[0]):
         s = separation[order[r]]
         if s > 0.0:
@@ -186,9 +193,9 @@ def store_impulses(order, normal, tangent, normal_total, tangent_total, pair_key
 
 
 @njit(cache=True)
-def _soft_step(position, angle, velocity, properties, ints, floats):
-    """One soft step of the world (module docstring) on its state (``position``,
-    ``angle``, ``velocity`` and ``properties``: the bodies' extents, inverse masses and
+def _soft_step(numbers, ints, floats):
+    """One soft step of the world (module docstring) on its state (its ``numbers``, cut
+    into ``position``, ``angle``, ``velocity`` and ``properties``: the bodies' extents, inverse masses and
     inertias, friction and restitution, read every step, columns as
     :mod:`~solutions.body_state` names them; a body is dynamic where its inverse mass is
     not 0 and turns where its inverse inertia is not, as the state's ``dynamic`` and
@@ -202,6 +209,7 @@ def _soft_step(position, angle, velocity, properties, ints, floats):
     Every other array of the step is a view of the work spaces (:func:`~solutions.response.soft_step_layout.work_sizes`).
     Returns 0, or, having changed nothing, the number of candidate pairs the buffers
     must be made for (more than ``capacity``)."""
+    position, angle, velocity, properties = state_arrays(numbers)
     # 1. Candidate pairs: from STRIP_GRID_MIN_BODIES bodies on, the strip grid's, which
     # allocates, here; fewer bodies are swept in _step_on_pairs, without allocating.
     if angle.shape[0] < STRIP_GRID_MIN_BODIES:
@@ -401,8 +409,7 @@ class CompiledSoftStep:
             self._write_parameters(h, settings)
             self._settings_key = key
         while True:
-            needed = _soft_step(state.position, state.angle, state.velocity, state.properties, self.ints,
-                                self.floats)
+            needed = _soft_step(state.numbers, self.ints, self.floats)
             if not needed:
                 break
             self.make_buffers(2 * needed)        # nothing changed: step again

@@ -76,7 +76,7 @@ SIZE_SUBMISSION_SECONDS = 40.0
 #: batch.  Measured: about 130 MiB grading the reference, 450 MiB with the 8,000-ball scene
 #: (parsing its 21 MB answer); a 8,000 x 8,000 distance matrix alone would be 1 GiB.
 PARENT_MEMORY_BYTES = 768 * 1024**2
-#: Longest list a figure kept in results.json may hold (grader.harness.figures.FIGURE_CAPS).
+#: Longest list a figure kept in results.json may hold (grader.harness.figure_caps.FIGURE_CAPS).
 FIGURE_LIST_CAP = 4000
 #: What the hostile cases write (hostile-write-outside appends the first, hostile-write-results
 #: writes the second): a repository file holding one was written by them.

@@ -43,6 +43,8 @@ from matplotlib.patches import Circle as CirclePatch
 from matplotlib.patches import FancyArrowPatch, Patch, Polygon, Rectangle
 from matplotlib.patheffects import withStroke
 
+from .figure_caps import bounded
+
 SHAPE_COLORS = ("#0072B2", "#CC79A7")  # A blue, B reddish purple
 EXPECTED_COLOR = "#009E73"  # bluish green
 GOT_COLOR = "#D55E00"  # vermillion
@@ -60,58 +62,6 @@ MAX_LABELLED_BOXES = 40
 MAX_LISTED_GROUPS = 4
 #: Grid lines are drawn when there are at most this many per axis.
 MAX_GRID_LINES = 150
-
-
-#: The most of each list a figure keeps: what a student's answer may make large is cut
-#: before anything is drawn, stored or sent (drawing is linear in these).
-FIGURE_CAPS = {"points": 16, "vertices": 64, "aabbs": 4000, "missed": 400, "extra": 400, "title": 300}
-
-
-def bounded(figure):
-    """A copy of ``figure`` with every list a student's answer can grow cut to
-    :data:`FIGURE_CAPS` (and a note of what was cut); anything not a dict is None."""
-    if not isinstance(figure, dict):
-        return None
-    cut: list[str] = []
-
-    def limit(items, name):
-        if not isinstance(items, (list, tuple)):
-            return items
-        if len(items) > FIGURE_CAPS[name]:
-            cut.append(f"{len(items)} {name}")
-            return list(items[:FIGURE_CAPS[name]])
-        return list(items)
-
-    def contact(value):
-        if not isinstance(value, dict):
-            return value
-        value = dict(value)
-        for name in ("points", "depths"):
-            if name in value:
-                value[name] = limit(value[name], "points")
-        return value
-
-    def shape(value):
-        if isinstance(value, dict) and "vertices" in value:
-            value = dict(value)
-            value["vertices"] = limit(value["vertices"], "vertices")
-        return value
-
-    out = dict(figure)
-    if isinstance(out.get("title"), str):
-        out["title"] = out["title"][:FIGURE_CAPS["title"]]
-    if "shapes" in out:
-        out["shapes"] = [shape(v) for v in (limit(out["shapes"], "vertices") or [])][:2]
-    for name in ("expected", "got"):
-        if name in out:
-            out[name] = contact(out[name])
-    for name in ("aabbs", "missed", "extra"):
-        if name in out:
-            out[name] = limit(out[name], name)
-    if cut:
-        out["cut"] = "only part of the case is drawn: " + ", ".join(cut)
-        out["title"] = f"{out.get('title', '')} ({out['cut']})".strip()
-    return out
 
 
 def draw_figure(figure: dict) -> Figure:

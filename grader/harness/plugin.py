@@ -47,7 +47,7 @@ from typing import Callable
 import pytest
 
 from .credit import GradedFailure
-from .figures import bounded
+from .figure_caps import bounded
 from .outcome import MESSAGE_LIMIT, Outcome, StudentCallFailed, StudentCallStopped, TestResult, capped
 from .package import PackageNotFound, find_package, package_folder
 from .replay import is_hypothesis_test, replaying

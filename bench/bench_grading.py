@@ -108,13 +108,20 @@ def verdict(met: bool) -> str:
     return "goal met" if met else "short of the goal (a figure, not an error)"
 
 
-def per_submission(meter: CpuMeter, scratch: Path, count: int) -> tuple[float, float, list[Path]]:
-    """(per submission, start-up) processor seconds: ``grader grade`` on 1 and ``count`` copies."""
+def per_submission(meter: CpuMeter, scratch: Path, count: int) -> tuple[float, float, float, list[Path]]:
+    """(per submission, start-up, per submission on an idle machine) processor seconds:
+    ``grader grade`` on 1 and on ``count`` copies.  The idle figure divides each run's
+    seconds by the inflation (:func:`cpu_inflation`) measured around it, so that a load
+    that changes between the two runs does not land in the difference."""
     copies = [folder_copy(REPO / "solutions", scratch / "slope" / f"ref{n}") for n in range(count)]
-    _, one, _ = grade(meter, copies[:1], scratch / "out-slope-1")
-    _, many, _ = grade(meter, copies, scratch / f"out-slope-{count}")
+    figures = []
+    for chosen in (copies[:1], copies):
+        before = cpu_inflation()
+        _, seconds, _ = grade(meter, chosen, scratch / f"out-slope-{len(chosen)}")
+        figures.append((seconds, seconds / ((before + cpu_inflation()) / 2)))
+    (one, one_idle), (many, many_idle) = figures
     per = (many - one) / (count - 1)
-    return per, one - per, copies
+    return per, one - per, (many_idle - one_idle) / (count - 1), copies
 
 
 def print_phases(found: dict) -> None:
@@ -160,16 +167,14 @@ def run(scratch: Path, meter: CpuMeter, count: int, slope: int, jobs: int) -> No
         wall, processor, _ = grade(meter, [submission], scratch / f"out-{name}")
         print(f"  {name:10s} {wall:6.2f} s wall clock, {processor:6.2f} s of processor time")
 
-    inflation = cpu_inflation()
-    per, startup, copies = per_submission(meter, scratch, slope)
-    inflation = (inflation + cpu_inflation()) / 2
+    per, startup, idle, copies = per_submission(meter, scratch, slope)
     print(f"\nthe reference, every public and hidden test, per submission: `grader grade` on 1 and on {slope} "
           f"copies, --jobs 1 (goal: at most {GOAL_PROCESSOR_SECONDS:g} s of processor time)\n"
           f"  {per:6.2f} s per submission   {verdict(per <= GOAL_PROCESSOR_SECONDS)}\n"
           f"  {startup:6.2f} s once per run (start, imports, test collection, workers' start)\n"
-          f"  a processor second does {1 / inflation:.2f} of an idle machine's work now "
-          f"(grader.batch.calibration's work in processor time): about {per / inflation:.2f} s per submission "
-          "on an idle machine")
+          f"  about {idle:6.2f} s per submission on an idle machine (each run's seconds divided by how much "
+          "less a processor second does under the load around it, grader.batch.calibration's work timed in "
+          "processor time; a rough figure, the load of other jobs varies)")
 
     started = time.perf_counter()
     processor = meter.run([sys.executable, "-m", "grader", "similarity", *map(str, copies), "--out",

@@ -236,24 +236,52 @@ def tall_box(velocity_y: float = -3.0) -> list[Body]:
     return [ground, Body.box(0.4, 3.0, mass=1.0, position=(0.0, 1.5), velocity=(0.0, velocity_y), friction=0.6)]
 
 
+def follow_reference(student, make_bodies, scene: str, steps: int, hint: str = "") -> World:
+    """Step ``make_bodies()`` with the student's step_bodies and with the reference's,
+    side by side; fail at the first step where a body's pose differs by more than 1e-6."""
+    world = world_with(student, make_bodies(), scene)
+    reference = SweepWorld(make_bodies(), WorldSettings(solver=SolverSettings(block_solver=False)))
+    for step in range(steps):
+        world.step(DT)
+        reference.step(DT)
+        for index, (body, want) in enumerate(zip(world.bodies[1:], reference.bodies[1:]), start=1):
+            got_pose, want_pose = [*body.position, body.angle], [*want.position, want.angle]
+            if not np.allclose(got_pose, want_pose, atol=1e-6):
+                which = f"body {index}" if len(world.bodies) > 2 else "the box"
+                fail(f"{scene}, step {step + 1}: {which} is at (x, y, angle) = {np.round(got_pose, 5).tolist()}, "
+                     f"the reference's step puts it at {np.round(want_pose, 5).tolist()}{hint}")
+    return world
+
+
 @pytest.mark.points(2)
 @pytest.mark.visibility("hidden")
 @pytest.mark.title("World, your step: a tall box landing flat at 3 m/s stops upright, as the reference's "
                    "step stops it")
 def test_tall_box_landing(student):
     scene = "the tall box (0.4 x 3 m) landing flat at 3 m/s"
-    world = world_with(student, tall_box(), scene)
-    reference = SweepWorld(tall_box(), WorldSettings(solver=SolverSettings(block_solver=False)))
-    for step in range(30):
-        world.step(DT)
-        reference.step(DT)
-        got = np.array([*world.bodies[1].position, world.bodies[1].angle])
-        want = np.array([*reference.bodies[1].position, reference.bodies[1].angle])
-        if not np.allclose(got, want, atol=1e-6):
-            fail(f"{scene}, step {step + 1}: the box is at (x, y, angle) = {np.round(got, 5).tolist()}, the "
-                 f"reference's step puts it at {np.round(want, 5).tolist()}")
+    world = follow_reference(student, tall_box, scene, 30)
     angle = abs(float(world.bodies[1].angle))
     assert angle < 0.01, f"{scene}: it turned by {angle:.4f} rad (the reference: 0.004 rad)"
+
+
+def bouncing_bodies() -> list[Body]:
+    """The ground (e = 1), a ball (e = 0.7) and a tilted box (e = 0.4) dropped onto it, a
+    ball (e = 0.8) dropped onto a box resting on it."""
+    return [Body.box(20.0, 1.0, position=(0.0, -0.5), is_static=True, friction=0.6, restitution=1.0),
+            Body.circle(0.4, mass=1.0, position=(-4.0, 1.5), restitution=0.7, friction=0.3),
+            Body.box(0.8, 0.6, mass=2.0, position=(0.0, 1.2), angle=0.3, restitution=0.4, friction=0.5),
+            Body.box(1.0, 1.0, mass=3.0, position=(4.0, 0.5), friction=0.6),
+            Body.circle(0.3, mass=0.5, position=(4.1, 2.0), restitution=0.8, friction=0.3)]
+
+
+@pytest.mark.points(2)
+@pytest.mark.visibility("hidden")
+@pytest.mark.title("World, your step: balls and a box dropped onto the ground and onto a box bounce as the "
+                   "reference's step makes them (1 s)")
+def test_bouncing_bodies(student):
+    follow_reference(student, bouncing_bodies,
+                     "the balls and the tilted box dropped onto the ground and onto a box (e = 0.4 to 0.8)", 60,
+                     " (a landing faster than the threshold leaves at e times its closing speed)")
 
 
 @pytest.mark.points(2)

@@ -20,6 +20,7 @@ student's functions called through the sandbox: around ``prestep_point`` and
 """
 from __future__ import annotations
 
+import copy
 import math
 from functools import lru_cache
 
@@ -687,17 +688,28 @@ def test_sliding_box_stops(student):
         f"after {want:.4f} m")
 
 
-@pytest.mark.points(1)
-@pytest.mark.title("Scene: a ball kicked up off the ground rises v^2 / 2g (a contact never pulls)")
+@pytest.mark.points(2)
+@pytest.mark.title("Scene: a ball kicked up off the ground rises v^2 / 2g (a contact never pulls), lands and bounces "
+                   "at e v")
 def test_kicked_ball_rises(student):
-    scene = "the ball kicked up at 4 m/s"
-    ball = scenes.Upright(1.0, radius=0.5, y=0.5, velocity=[0.0, 4.0, 0.0])
-    settings, memory, top = scenes.SceneSettings(), {}, 0.5
-    for _ in range(30):
+    """A ball (e = 0.5) resting on the ground kicked up at 4 m/s: it rises the stepped
+    v^2 / 2g - v h / 2, lands at about 4 m/s and leaves at half of that, up to the
+    height the exact stepped path (:func:`upright_scenes.vertical_paths`) reaches."""
+    scene = "the ball kicked up at 4 m/s (e = 0.5)"
+    ball = scenes.Upright(1.0, radius=0.5, y=0.5, velocity=[0.0, 4.0, 0.0], restitution=0.5)
+    settings, memory, heights = scenes.SceneSettings(), {}, []
+    exact = [0.5 - step[0][0] for step in scenes.vertical_paths([ball], settings, 80)]      # the centre's y (m)
+    for _ in range(80):
         scenes.step_scene([ball], scene_calls(student, scene), settings, memory)
-        top = max(top, ball.y)
+        heights.append(ball.y)
+    landing = next(k for k in range(1, 80) if exact[k] < exact[k - 1] and exact[k + 1] > exact[k])
     want = 4.0 ** 2 / (2 * scenes.G) - 4.0 * settings.dt / 2
+    top = max(heights[:landing])
     assert abs(top - 0.5 - want) < 1e-3, f"{scene}: it rose {top - 0.5:.4f} m, {want:.4f} m expected"
+    rebound, want_rebound = max(heights[landing:]) - 0.5, max(exact[landing:]) - 0.5
+    assert abs(rebound - want_rebound) < 1e-6, (
+        f"{scene}: after landing at about 4 m/s it bounced {rebound:.4f} m high, {want_rebound:.4f} m expected "
+        "(it leaves at e times its closing speed, measured before the sweeps)")
 
 
 @pytest.mark.points(1)
@@ -714,7 +726,7 @@ def test_resting_ball_stays(student):
                                            "must not bounce")
 
 
-@pytest.mark.points(1)
+@pytest.mark.points(2)
 @pytest.mark.title("Scene: a ball hitting the ground at 5 m/s leaves at e v whatever the number of sweeps")
 def test_bounce_whatever_the_sweeps(student):
     for iterations in (1, 2, 3, 10):
@@ -728,17 +740,20 @@ def test_bounce_whatever_the_sweeps(student):
 
 
 @pytest.mark.points(2)
-@pytest.mark.title("Scene, your step: a box resting on the ground and a ball dropped onto it rest within the slop "
-                   "(step_bodies, 2 s)")
+@pytest.mark.title("Scene, your step: a box resting on the ground, a ball dropped onto it and a box sliding at 2 m/s "
+                   "come to rest within the slop, the slider after v^2 / (2 mu g) (step_bodies, 2 s)")
 def test_step_rests_within_the_slop(student):
-    """Stepped by step_bodies alone: a 1 m box that cannot turn, resting on the ground,
-    and a ball dropped from 0.5 m (e = 0).  The push takes 20 % of an overlap beyond the
-    5 mm slop a step, so both rest with their overlaps within the slop.  A body moved
-    before its contact is solved sinks by g h^2 every step and rests where the push
-    balances that, 5 mm + g h^2 / 0.2 = 18.6 mm deep."""
-    scene = "the box resting on the ground and the ball dropped onto it"
-    bodies = [scenes.Upright(1.0, 0.5, 0.5, x=0.0, y=0.5, turns=False), scenes.Upright(1.0, radius=0.5, x=3.0, y=1.0)]
-    settings, memory, deepest = scenes.SceneSettings(), {}, [0.0, 0.0]
+    """Stepped by step_bodies alone: a 1 m box that cannot turn, resting on the ground, a
+    ball dropped from 0.5 m (e = 0) and a box sliding at 2 m/s (mu = 0.5).  The push
+    takes 20 % of an overlap beyond the 5 mm slop a step, so all rest with their overlaps
+    within the slop; friction, mu times the normal impulse, stops the slider after the
+    stepped v^2 / (2 mu g) - v h / 2.  A body moved before its contact is solved sinks by
+    g h^2 every step and rests where the push balances that, 5 mm + g h^2 / 0.2 = 18.6 mm
+    deep."""
+    scene = "the box resting on the ground, the ball dropped onto it and the box sliding at 2 m/s"
+    bodies = [scenes.Upright(1.0, 0.5, 0.5, x=0.0, y=0.5, turns=False), scenes.Upright(1.0, radius=0.5, x=3.0, y=1.0),
+              scenes.Upright(1.0, 0.5, 0.5, x=6.0, y=0.5, velocity=[2.0, 0.0, 0.0], turns=False)]
+    settings, memory, deepest = scenes.SceneSettings(), {}, [0.0, 0.0, 0.0]
     for step in range(120):
         scenes.step_scene_whole(bodies, scene_calls(student, scene), settings, memory)
         if step >= 60:
@@ -746,15 +761,37 @@ def test_step_rests_within_the_slop(student):
     sink = scenes.G * settings.dt ** 2
     balance = settings.slop + sink / settings.bias_factor      # where the push balances g h^2 a step
     if max(deepest) > settings.slop + 1e-3:
-        why = (f" Both rest where a push of 20 % of the overlap beyond the slop balances a sinking of g h^2 = "
+        why = (f" They rest where a push of 20 % of the overlap beyond the slop balances a sinking of g h^2 = "
                f"{sink * 1e3:.2f} mm a step, {balance * 1e3:.1f} mm deep: the bodies move before their contacts are "
                "solved. The step is gravity, then the sweeps, then the positions, with the velocities the sweeps "
                "leave." if all(abs(d - balance) < 1e-3 for d in deepest) else "")
-        fail(f"{scene}: in the second second the box overlaps the ground by up to {deepest[0] * 1e3:.2f} mm and the "
-             f"ball by {deepest[1] * 1e3:.2f} mm; resting, they stay within the slop, {settings.slop * 1e3:.0f} mm."
-             + why)
+        fail(f"{scene}: in the second second the resting box overlaps the ground by up to {deepest[0] * 1e3:.2f} mm, "
+             f"the ball by {deepest[1] * 1e3:.2f} mm and the slider by {deepest[2] * 1e3:.2f} mm; resting, they stay "
+             f"within the slop, {settings.slop * 1e3:.0f} mm." + why)
+    slid = bodies[2].x - 6.0
+    want = 2.0 ** 2 / (2 * 0.5 * scenes.G) - 2.0 * settings.dt / 2      # the stepped distance
+    assert abs(slid - want) < 0.01 * want, (f"{scene}: the slider stopped after {slid:.4f} m; friction, mu = 0.5 "
+                                            f"times the normal impulse, stops it after {want:.4f} m")
     speed = max(abs(v) for body in bodies for v in body.velocity)
     assert speed < 1e-3, f"{scene}: after 2 s a body still moves at {speed:.3g} m/s"
+
+
+@pytest.mark.points(2)
+@pytest.mark.title("Scene, your step: two balls and a box dropped onto the ground bounce at e times their landing "
+                   "speed, then settle (step_bodies, 2 s)")
+def test_step_drops_bounce(student):
+    """Stepped by step_bodies alone: balls dropped from 1 m (e = 0.6) and 0.5 m (e = 0.9)
+    and a box that cannot turn from 0.8 m (e = 0.5), each alone over the ground.  Every
+    landing faster than the threshold leaves at e times its closing speed, whatever the
+    sweeps do after the first; slower ones stop, and the overlaps are pushed out."""
+    bodies = [scenes.Upright(1.0, radius=0.5, x=0.0, y=1.5, restitution=0.6),
+              scenes.Upright(1.0, radius=0.3, x=2.0, y=0.8, restitution=0.9),
+              scenes.Upright(2.0, 0.4, 0.25, x=4.0, y=1.05, restitution=0.5, turns=False)]
+    follow_targets(student, "the two balls and the box dropped onto the ground (e = 0.6, 0.9, 0.5)", bodies,
+                   scenes.SceneSettings(), 120,
+                   "a landing faster than the threshold leaves at e times its closing speed, measured once before "
+                   "the sweeps, then kept; gravity, the sweeps, then the positions with the new velocities; "
+                   + PUSH_HINT, whole=True)
 
 
 
@@ -762,11 +799,18 @@ def test_step_rests_within_the_slop(student):
 # Bodies that move only up and down, each alone on the ground, every contact point as
 # deep: the oracle solves their contact exactly (the sweeps would bring the velocity to
 # the target, or leave a faster one), so only contact_target is graded by these scenes.
-def follow_targets(student, scene: str, bodies: list, settings, steps: int, hint: str) -> None:
-    """Step ``bodies`` with the student's targets and compare every body's overlap and
-    velocity, step by step, with the physics' (:func:`upright_scenes.vertical_paths`)."""
+def follow_targets(student, scene: str, bodies: list, settings, steps: int, hint: str, whole: bool = False) -> None:
+    """Step ``bodies`` with the student's targets (``whole``: with their ``step_bodies``)
+    and compare every body's overlap and velocity, step by step, with the physics'
+    (:func:`upright_scenes.vertical_paths`)."""
     want = scenes.vertical_paths(bodies, settings, steps)
-    got = scenes.vertical_paths(bodies, settings, steps, scene_calls(student, scene))
+    if whole:
+        stepped, memory, got = copy.deepcopy(bodies), {}, []
+        for _ in range(steps):
+            scenes.step_scene_whole(stepped, scene_calls(student, scene), settings, memory)
+            got.append([(depth, body.velocity[1]) for depth, body in zip(scenes.overlaps(stepped), stepped)])
+    else:
+        got = scenes.vertical_paths(bodies, settings, steps, scene_calls(student, scene))
     for step, (got_step, want_step) in enumerate(zip(got, want)):
         for index, ((depth, velocity), (want_depth, want_velocity)) in enumerate(zip(got_step, want_step)):
             if abs(depth - want_depth) > 1e-9 or abs(velocity - want_velocity) > 1e-9:

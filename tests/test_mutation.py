@@ -103,3 +103,23 @@ def test_a_mutant_is_graded_by_its_exercise_then_the_tests_seeing_it():
     every = mutation_scope.tests_seeing("narrowphase/projection.py", "sat", tests, every=True)
     assert [t.name for _, chosen in every for t in chosen] == ["sat.a", "contacts.b", "momentum.c", "sat.d",
                                                                "contacts.e"]
+
+
+def test_only_a_test_that_ran_and_did_not_pass_kills_a_mutant():
+    from types import SimpleNamespace as Result
+
+    tests = [Result(name=name) for name in "abc"]
+    calls = []
+
+    def run_tests(workspace, chosen, limits, **options):
+        """a passes; the budget leaves b and c unstarted, then b passes and c fails."""
+        calls.append([t.name for t in chosen])
+        status = {"a": "passed", "b": "not_run" if len(calls) == 1 else "passed",
+                  "c": "not_run" if len(calls) == 1 else "failed"}
+        return [Result(test=t, outcome=Result(status=status[t.name])) for t in chosen]
+
+    failing = mutation._first_failure(run_tests, tests, None)
+    assert failing.test.name == "c" and failing.outcome.status == "failed"
+    assert calls == [["a", "b", "c"], ["b", "c"]]
+    assert mutation._first_failure(lambda *a, **k: [Result(test=t, outcome=Result(status="passed"))
+                                                    for t in a[1]], tests, None) is None

@@ -62,7 +62,6 @@ def test_quality_sorted(student):
                             (boxes[np.argsort(-boxes[:, 1])], "sorted by min_y, descending")], "tree quality")
 
 
-# Last: their growth check times the tree; a wrong tree fails the quicker tests above first.
 @pytest.mark.points(2)
 @pytest.mark.visibility("after_due_date")
 @pytest.mark.title("Dynamic tree: many equal boxes, points and lines")

@@ -19,6 +19,12 @@ import os, sys, time, subprocess
 def add(a, b):
     return a + b
 
+def total_then_zero(rows):
+    total = float(sum(map(sum, rows)))
+    for row in rows:           # the argument changed in place: the worker's kept copy must not
+        row[:] = [0.0] * len(row)
+    return total
+
 def loud():
     print("x" * 10_000_000)
     return 1
@@ -592,3 +598,22 @@ def test_every_sandbox_of_a_process_isolates_as_one_decision_says(package, monke
             box.close()
     finally:
         isolation.decided_isolation.cache_clear()
+
+
+def test_a_kept_argument_crosses_the_channel_once_per_worker_and_each_call_gets_a_fresh_copy(package):
+    """A large scene read by several calls (grader.sandbox.kept): sent with the first
+    request, referred to by its key after, sent again to a restarted worker."""
+    from grader.sandbox.kept import KeptArgument
+
+    rows = [[float(4 * i + k) for k in range(4)] for i in range(1000)]
+    kept = KeptArgument("scene", lambda: [list(row) for row in rows], 4000)
+    with Sandbox(package, Limits(call_timeout=5.0)) as box:
+        sent = []
+        send = box._send
+        box._send = lambda data, deadline: sent.append(data) or send(data, deadline)
+        results = [box.call("exercises.hostile", "total_then_zero", [kept]) for _ in range(2)]
+        box.start()                       # a new worker process holds nothing
+        results.append(box.call("exercises.hostile", "total_then_zero", [kept]))
+    assert [(r.status, r.value) for r in results] == [("ok", float(sum(map(sum, rows))))] * 3, results
+    assert [b'"$keep"' in data for data in sent] == [True, False, True]
+    assert len(sent[1]) < 400 < len(sent[0])

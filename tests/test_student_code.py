@@ -1,4 +1,5 @@
-"""StudentCode.call_once: a check several tests make on the same input runs once per package."""
+"""StudentCode.call_once: a check several tests make on the same input runs once per package;
+StudentCode.kept: a large argument several calls read crosses the channel once."""
 import numpy as np
 import pytest
 
@@ -40,3 +41,20 @@ def test_a_failed_call_fails_every_test_asking_for_it_without_running_again(stat
             student.call_once("broadphase.reads", "pairs_reads", [[0.0, 0.0, 1.0, 1.0]])
         assert "broadphase.reads.pairs_reads" in caught.value.outcome.message
     assert len(sandbox.requests) == 1
+
+
+def test_kept_arrays_are_keyed_by_content_and_sent_whole_past_the_limit(monkeypatch):
+    """StudentCode.kept: equal arrays share a key (sent once to a worker, then referred to);
+    another array has its own; past KEPT_NUMBERS_LIMIT an argument is sent whole each time."""
+    from grader.sandbox import kept
+    from grader.sandbox.codec import ARRAY_TAG, KEEP_TAG, KEPT_TAG
+
+    boxes = np.arange(8.0).reshape(2, 4)
+    held = kept.KeptValues()
+    first = held.form(StudentCode.kept(boxes))
+    assert first == {KEEP_TAG: first[KEEP_TAG], "value": {ARRAY_TAG: boxes.tolist()}}
+    assert held.form(StudentCode.kept(boxes.copy())) == {KEPT_TAG: first[KEEP_TAG]}
+    assert held.form(StudentCode.kept(boxes.T.copy()))[KEEP_TAG] != first[KEEP_TAG]
+    monkeypatch.setattr(kept, "KEPT_NUMBERS_LIMIT", 20)
+    assert held.form(StudentCode.kept(boxes + 1)) == {ARRAY_TAG: (boxes + 1).tolist()}
+    assert held.form(0.1) == 0.1

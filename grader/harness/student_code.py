@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..sandbox import codec
+from ..sandbox.kept import KeptArgument, kept_array
 from .outcome import OUTPUT_LIMIT, Outcome, StudentCallFailed, StudentCallStopped, capped_output
 from ..sandbox.process import CallResult, Sandbox
 from .compare import call_text
@@ -65,6 +66,8 @@ def encode(value: Any) -> Any:
         return [encode(v) for v in value]
     if isinstance(value, (np.floating, np.integer)):
         return value.item()
+    if kind is KeptArgument:   # encoded when sent (grader.sandbox.kept)
+        return value
     if value is None or isinstance(value, (bool, int, float, str, dict)):
         return value
     return codec.encode_value(value)
@@ -132,6 +135,13 @@ class StudentCode:
     def call(self, module: str, function: str, *args, timeout: float | None = None) -> Any:
         """The returned value (plain data), or StudentCallFailed explaining what went wrong."""
         return self.value_of(self.raw(module, function, *args, timeout=timeout), f"{module}.{function}")
+
+    @staticmethod
+    def kept(array: np.ndarray) -> KeptArgument:
+        """``array`` as an argument each worker process receives once and keeps: later calls
+        with an equal array send only its key (:mod:`grader.sandbox.kept`).  For the large
+        scenes several calls read."""
+        return kept_array(array, encode)
 
     def call_once(self, module: str, function: str, *args, timeout: float | None = None) -> Any:
         """As :meth:`call`, but a call identical to one made before on this package (same

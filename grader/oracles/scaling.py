@@ -82,7 +82,11 @@ def timed_cpu(student, module: str, function: str, args: tuple, repeat: int, tim
 
 def work_cpu(student, module: str, function: str, args: tuple, repeat: int, timeout: float) -> float | None:
     """CPU seconds of ``repeat`` calls less that of a request that calls nothing (the
-    worker's reading of the scene: it grows with N however the function works)."""
+    worker's reading of the scene: it grows with N however the function works).  The
+    scene, a kept argument (:meth:`~grader.harness.student_code.StudentCode.kept`), is
+    sent by a first request that calls nothing, untimed: both timed requests then
+    decode the worker's copy, so the one calling nothing reads what the other reads."""
+    student.raw(module, function, *args, repeat=0, timeout=60.0)
     spent = timed_cpu(student, module, function, args, repeat, timeout)
     if spent is None:
         return None
@@ -96,6 +100,8 @@ def growth(student, module: str, function: str, args_of: Callable[[np.ndarray], 
     timed out."""
     small, large = sparse_scene(small_scene, 1), sparse_scene(small_scene * factor, 2)
     student.call(module, function, *args_of(small[:20]))                  # imports and first-call costs
+    # Sent to the worker once (several functions and measurements read the same scenes).
+    small, large = student.kept(small), student.kept(large)
     small_time = work_cpu(student, module, function, args_of(small), factor * REPEATS, timeout=60.0)
     if small_time is None:
         return math.inf, f"{factor * REPEATS} calls on {small_scene} boxes took longer than 60 s"

@@ -36,6 +36,10 @@ CONTACT_TAG = "$contact"
 PAIRS_TAG = "$pairs"
 ARRAY_TAG = "$array"
 TAGS = (SHAPE_TAG, BODY_TAG, CONTACT_TAG, PAIRS_TAG, ARRAY_TAG)
+#: A request's argument for the worker to keep, ``{KEEP_TAG: key, "value": plain}``, and a
+#: later request's reference to it, ``{KEPT_TAG: key}`` (grader.sandbox.kept; requests only).
+KEEP_TAG = "$keep"
+KEPT_TAG = "$kept"
 
 BODY_FIELDS = ("mass", "angle", "angular_velocity", "restitution", "friction",
                "is_static", "fixed_rotation", "is_bullet")

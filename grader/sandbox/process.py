@@ -60,6 +60,7 @@ from typing import Any
 from . import codec, mounts, seccomp
 from ..errors import GradingError
 from .isolation import decided_isolation
+from .kept import KeptValues
 from .memory_cage import MemoryCage
 
 HERE = Path(__file__).resolve().parent
@@ -363,6 +364,7 @@ class Sandbox:
         self._cage: MemoryCage | None = None
         self._worker_pid: int | None = None
         self._buffer = bytearray()
+        self._kept = KeptValues()  # what the worker process holds (grader.sandbox.kept)
         self.restarts = 0
         self._settled: tuple[int, frozenset] | None = None  # see _reap_strays
         self.broken: SandboxBroken | None = None  # set once the worker could not even start
@@ -519,6 +521,7 @@ class Sandbox:
         self._response_fd = read_end
         self._buffer = bytearray()
         self._worker_pid = None
+        self._kept = KeptValues()  # a new worker holds nothing
         self._drainer = threading.Thread(target=self._drain_stderr, args=(self.process.stderr,), daemon=True)
         self._drainer.start()
 
@@ -600,7 +603,8 @@ class Sandbox:
     def call(self, module: str, function: str, args: list | tuple = (), kwargs: dict | None = None,
              timeout: float | None = None, repeat: int = 1, batch: bool = False,
              program: dict | None = None) -> CallResult:
-        """Call ``module.function(*args, **kwargs)`` in the worker (arguments already encoded).
+        """Call ``module.function(*args, **kwargs)`` in the worker (arguments already encoded;
+        a :class:`~grader.sandbox.kept.KeptArgument` is sent once to each worker process).
 
         ``repeat`` calls it that many times (for timing); ``batch=True`` takes ``args``
         as a list of argument lists and returns the list of values; ``program`` (then
@@ -631,6 +635,9 @@ class Sandbox:
             self.start()
         self._next_id += 1
         nonce = secrets.token_hex(16)
+        if not batch:   # arguments to keep (grader.sandbox.kept), after a restart above
+            args = [self._kept.form(a) for a in args]
+            kwargs = {k: self._kept.form(v) for k, v in (kwargs or {}).items()}
         request = {"id": self._next_id, "nonce": nonce, "module": module, "function": function,
                    "args": list(args), "kwargs": kwargs or {}, "repeat": repeat, "batch": batch,
                    "program": program}

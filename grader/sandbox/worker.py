@@ -122,15 +122,29 @@ class Worker:
         self.codec = codec
         self.modules: dict[str, object] = {}
         self.program_call = 0  # index of the program call running (run_program)
+        self.kept: dict[str, object] = {}  # plain values by key (grader.sandbox.kept)
 
     def load(self, name: str):
         if name not in self.modules:
             self.modules[name] = importlib.import_module(name)
         return self.modules[name]
 
+    def keep(self, request: dict) -> None:
+        """Store the arguments ``request`` asks the worker to keep, before anything else
+        runs (so a request that fails early still leaves them held, as the parent counts)."""
+        if request.get("batch") or request.get("program") is not None:
+            return
+        for value in [*request.get("args", []), *request.get("kwargs", {}).values()]:
+            if type(value) is dict and self.codec.KEEP_TAG in value:
+                self.kept[value[self.codec.KEEP_TAG]] = value["value"]
+
     def decode(self, value):
         codec = self.codec
         if isinstance(value, dict):
+            if codec.KEPT_TAG in value:     # a fresh copy of what an earlier request sent
+                return self.decode(self.kept[value[codec.KEPT_TAG]])
+            if codec.KEEP_TAG in value:
+                return self.decode(value["value"])
             if codec.SHAPE_TAG in value:
                 return codec.decode_shape(value, self.load("exercises.shapes"))
             if codec.BODY_TAG in value:
@@ -178,6 +192,7 @@ class Worker:
 
     def handle(self, request: dict, captured: CappedText) -> dict:
         """Run one request; the response's ``status`` says how it went."""
+        self.keep(request)
         if request.get("program") is not None:
             return self.handle_program(request["program"], captured)
         try:

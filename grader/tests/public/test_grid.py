@@ -19,7 +19,7 @@ from grader.harness.compare import show
 from grader.harness.credit import fail
 from grader.oracles.brute_force import describe_boxes, overlapping_pairs, pairs_figure, smallest_wrong_scene
 from grader.oracles.random_cases import clustered_aabbs, random_aabbs, resting_piles
-from grader.oracles.scaling import GRID_GROWTH_FACTOR, GRID_SMALL_SCENE, growth_problem
+from grader.oracles.scaling import growth_problem
 from grader.harness.outcome import StudentCallFailed, StudentCallStopped
 
 MODULE = "broadphase.uniform_grid"
@@ -40,8 +40,7 @@ GROWTH_CELL = 2.0
 def check_algorithm(student, function: str) -> None:
     """Fail every test of ``function`` when it does the work of a brute force (measured
     once a session): right pairs from testing every pair are not the exercise."""
-    problem = growth_problem(student, MODULE, function, lambda boxes: (boxes, GROWTH_CELL), ALGORITHMS[function],
-                             GRID_GROWTH_FACTOR, GRID_SMALL_SCENE)
+    problem = growth_problem(student, MODULE, function, lambda boxes: (boxes, GROWTH_CELL), ALGORITHMS[function])
     if problem is not None:
         fail(problem)
 

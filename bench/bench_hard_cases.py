@@ -1,6 +1,6 @@
 """Hard scenes under a grid of settings: time per frame against error, reference, pymunk, Box2D 2.3 and v3.
 
-    python bench/bench_hard_cases.py [--quick] [--out DIR]
+    python bench/bench_hard_cases.py [--quick] [--scenes NAME ...] [--out DIR]
 
 Every scene runs under every setting of the grid, side by side in one run:
 
@@ -244,11 +244,13 @@ def warm_up_compiled_twins() -> None:
     world.step(FRAME)
 
 
-def run(quick: bool = False) -> list[dict]:
+def run(quick: bool = False, scenes: list[str] | None = None) -> list[dict]:
+    """Every scene (``scenes``: only these, of ``SCENES``), side by side within a scene."""
     warm_up_compiled_twins()
     rows = []
     for name, seconds in (QUICK_SCENES if quick else SCENES).items():
-        rows.extend(simulate(name, seconds, quick))
+        if scenes is None or name in scenes:
+            rows.extend(simulate(name, seconds, quick))
     mark_pareto(rows)
     return rows
 
@@ -374,8 +376,9 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="two scenes, one simulated second, a smaller grid")
     parser.add_argument("--out", type=Path, default=Path("out"), help="folder for hard_cases.md and .png")
+    parser.add_argument("--scenes", nargs="+", choices=list(SCENES), help="only these scenes (default: all)")
     args = parser.parse_args(argv)
-    rows = run(args.quick)
+    rows = run(args.quick, args.scenes)
     text = table(rows)
     text += ("\n\nGoal: at equal processor time per frame, the compiled reference's error below pymunk's, "
              "Box2D 2.3's and Box2D v3's\n\n" + equal_time_goals(rows) + "\n\n" + pyramid_20_goal(0.5 if args.quick else 1.0))

@@ -64,7 +64,7 @@ from .made_when_asked import MadeWhenAsked
 from .narrowphase.dispatch import collide
 from .narrowphase.speculative import SPECULATIVE_MARGIN, speculative_polygon_manifold
 from .response.contact_solver import BACKENDS, ContactSolver, SolverSettings
-from .response.solver_settings import SoftStepSettings
+from .response.solver_settings import CountsChanges, SoftStepSettings
 from .response.soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, SoftStepSolver, soft_coefficients
 from .shapes import AABB, OBB, Circle, Shape, bounding_aabb
 from .twins import HAS_TWINS, require_twins
@@ -102,7 +102,7 @@ def auto_broad_phase(shapes: list[Shape]) -> str:
 
 
 @dataclass
-class WorldSettings:
+class WorldSettings(CountsChanges):
     """Switches of the world step.
 
     Attributes
@@ -227,6 +227,7 @@ class World:
         every step reads them from the state."""
         self._changes_seen = self.state.changes
         self._static_shapes.clear()
+        self._same_step = None
         compiled = None
         if self.settings.backend == "numba" and self.settings.soft_step:
             from .response.soft_step_numba import CompiledSoftStep  # deferred: compiles numba on first use
@@ -245,6 +246,9 @@ class World:
     # The algorithm --------------------------------------------------------------
     def step(self, dt: float) -> None:
         """Advance the world by ``dt`` seconds (``substeps`` sub-steps of ``h``)."""
+        if self._same_step == (dt, id(self.settings), CountsChanges.changes, self.state.changes, len(self.bodies)):
+            self.compiled_step_again(dt)      # as the last step: settings, bodies and dt unchanged
+            return
         if not (0.0 < dt < math.inf):
             raise ValueError(f"dt must be a positive number of seconds, got {dt}")
         if len(self.bodies) != len(self.state.angle):
@@ -255,6 +259,12 @@ class World:
             self.look_again()
         if self.compiled_soft_step is not None:        # the same soft step, compiled whole
             self.compiled_step(h)
+            # The next step of the same dt under the same settings and bodies needs only
+            # the compiled call (compiled_step_again); a settings field set (counted by
+            # CountsChanges), other settings, a body change the state counts or another
+            # dt takes this path again.
+            self._same_step = ((dt, id(self.settings), CountsChanges.changes, self.state.changes, len(self.bodies))
+                               if self.compiled_soft_step.settled(h) else None)
             return
         soft = self.settings.soft_step
         # The plain step finds contacts again for every sub-step (each is a whole step of
@@ -288,6 +298,15 @@ class World:
             self.time += h
         MadeWhenAsked.set_recipes(self, self._compiled_world_recipes)
         MadeWhenAsked.set_recipes(self.solver, self._compiled_solver_recipes)
+        self._same_h = (h,) * settings.substeps
+
+    def compiled_step_again(self, dt: float) -> None:
+        """:meth:`compiled_step` for the ``dt`` of the last step, whose parameters it keeps."""
+        self.compiled_soft_step.step_again(self.state.numbers)
+        for h in self._same_h:
+            self.time += h
+        self.__dict__.update(self._compiled_world_recipes)      # MadeWhenAsked.set_recipes, without its call
+        self.solver.__dict__.update(self._compiled_solver_recipes)
 
     def _compiled_stats(self) -> StepStats:
         """The figures of the last compiled step (the recipe of :attr:`stats`)."""

@@ -14,8 +14,26 @@ POSITION_CORRECTIONS = ("none", "baumgarte", "projection", "split_impulse")
 ORDERS = ("manifolds", "colours")
 
 
+class CountsChanges:
+    """Settings whose every field set (at creation or after) adds one to ``CountsChanges.changes``,
+    one count for all settings objects: a world that keeps what it made of its settings
+    (the compiled soft step's parameters) makes it again only when the count moved.
+
+    >>> before = CountsChanges.changes
+    >>> SoftStepSettings().relax = False
+    >>> CountsChanges.changes > before
+    True
+    """
+
+    changes = 0
+
+    def __setattr__(self, name: str, value) -> None:
+        object.__setattr__(self, name, value)
+        CountsChanges.changes += 1
+
+
 @dataclass
-class SolverSettings:
+class SolverSettings(CountsChanges):
     """Switches and constants of the contact solvers (:class:`~.contact_solver.ContactSolver`
     and :class:`~.soft_step.SoftStepSolver`; the soft step corrects positions with its
     springs and relax pass, :class:`SoftStepSettings`, instead of ``position_correction``,
@@ -106,7 +124,7 @@ class SolverSettings:
 
 
 @dataclass
-class SoftStepSettings:
+class SoftStepSettings(CountsChanges):
     """The soft step's own settings (:mod:`.soft_step`); the plain step has none of these.
 
     Attributes

@@ -91,6 +91,27 @@ def test_a_grid_that_returns_the_brute_force_earns_nothing_and_is_told_why(tmp_p
             name, result.outcome.message[:500])
 
 
+#: The brute force again, refusing the growth check's scenes (1000 boxes or more) so that
+#: the measurement cannot be made.
+BRUTE_FORCE_GRID_REFUSING_LARGE = tuple(
+    Replacement("broadphase.uniform_grid", name, f'''
+        def {name}(aabbs, cell_size: float) -> set[tuple[int, int]]:
+            if len(aabbs) >= 1000:
+                raise ValueError("too many boxes")
+            return pairs_brute_force_numpy(aabbs)
+        ''', imports=("from .brute_force import pairs_brute_force_numpy",))
+    for name in ("pairs_grid_every_cell", "pairs_grid_center_cell"))
+
+
+def test_a_grid_failing_only_on_the_measured_scenes_earns_nothing(tmp_path):
+    names = {t for t in broadphase_tests("grid.", hidden=False) if "random" in t}
+    assert names
+    results = graded(tmp_path, BRUTE_FORCE_GRID_REFUSING_LARGE, names)
+    for name, result in results.items():
+        assert result.score == 0 and "failed on a sparse scene" in result.outcome.message, (
+            name, result.outcome.message[:500])
+
+
 def test_a_quadtree_whose_pairs_test_every_pair_fails_the_pairs_tests(tmp_path):
     names = broadphase_tests("quadtree.", hidden=True)
     results = graded(tmp_path, BRUTE_FORCE_QUADTREE, names)

@@ -120,8 +120,9 @@ def growth_problem(student, module: str, function: str, args_of: Callable[[np.nd
     """None when ``function`` does the work of ``algorithm`` (a sentence: "a grid visits
     the cells a box overlaps"), else why not; measured once per package and function.
 
-    ``args_of(boxes)`` gives the call's arguments for a scene.  Student calls that fail
-    (an exception, a stub) are not judged here: None, and the test's own calls report them.
+    ``args_of(boxes)`` gives the call's arguments for a scene.  A stub is not judged here
+    (None: the test's own calls report it); a call that fails on the measured scenes fails
+    the check, saying so (else failing only there would skip the measurement).
     """
     verdicts = _VERDICTS.setdefault(student, {})
     key = (module, function)
@@ -134,8 +135,15 @@ def growth_problem(student, module: str, function: str, args_of: Callable[[np.nd
                 again, again_how = growth(student, module, function, args_of, factor, small_scene)
                 if again < ratio:
                     ratio, how = again, again_how
-        except StudentCallFailed:
-            ratio, how = 0.0, ""
+        except StudentCallFailed as exc:
+            if exc.outcome.status == "not_implemented":   # a stub: the test's own calls say so
+                verdicts[key] = None
+                return None
+            # Failing only on the measured scenes must not skip the measurement.
+            said = (exc.outcome.message or exc.outcome.status).strip().splitlines()
+            verdicts[key] = (f"{function} failed on a sparse scene of {small_scene} boxes (the check that it does "
+                             f"the work of {algorithm}): {said[-1][:200] if said else exc.outcome.status}")
+            return verdicts[key]
         verdicts[key] = None if ratio <= MAX_GROWTH else (
             f"{function} does the work of a brute force, not of {algorithm}: on sparse scenes (boxes about 1 m "
             f"wide at a constant density, so the pairs grow like N), {factor} times more boxes took "

@@ -1,31 +1,38 @@
-"""impulse.scene keeps the reference's run of its ball scene per grading process
-(grader/tests/hidden/test_impulse.py, reference_run): the same trajectory for every
-submission, its time measured again side by side every few submissions and whenever the
-student's time is well over the kept figure."""
+"""The speed tests keep the reference's run per grading process
+(grader.harness.reference_runs): the same answer for every submission, its time measured
+again side by side every few submissions and whenever the student's time is well over
+the kept figure."""
 from pathlib import Path
 from types import SimpleNamespace
 
-import numpy as np
-
-from grader.tests.hidden import test_impulse
+from grader.harness import reference_runs
 
 
-def test_the_reference_scene_is_run_again_only_when_stale_or_when_the_student_looks_slow(monkeypatch, tmp_path):
+def test_a_reference_run_is_served_again_until_stale_or_until_the_student_looks_slow(monkeypatch, tmp_path):
+    monkeypatch.setattr(reference_runs, "_KEPT", {})
     runs = []
 
-    def run_scene(code, who):
-        runs.append(who)
-        return np.full((2, 3), len(runs), dtype=float), 0.1, 1.0   # trajectory, radius, seconds
+    def run():
+        runs.append(len(runs) + 1)
+        return f"answer {len(runs)}", 1.0
 
-    monkeypatch.setattr(test_impulse, "run_scene", run_scene)
-    monkeypatch.setattr(test_impulse, "_REFERENCE_RUNS", {})
     reference = SimpleNamespace(sandbox=SimpleNamespace(package_dir=Path(tmp_path)))
-    kept = test_impulse.REFERENCE_RUNS_KEPT
-    seen = [test_impulse.reference_run(reference, 1.0) for _ in range(kept + 1)]
-    assert len(runs) == 2                                   # the first submission and the one after `kept`
-    assert all(trajectory[0, 0] == 1 for trajectory, _ in seen[:kept]) and seen[kept][0][0, 0] == 2
-    slow = test_impulse.reference_run(reference, 1.0 * test_impulse.SLOWER_THAN_KEPT + 0.01)
-    assert len(runs) == 3 and slow[0][0, 0] == 3 and slow[1] == 1.0
+    kept = reference_runs.REFERENCE_RUNS_KEPT
+    seen = [reference_runs.kept_reference_run(reference, "scene", 1.0, run) for _ in range(kept + 1)]
+    assert seen == [("answer 1", 1.0)] * kept + [("answer 2", 1.0)]   # run again after `kept` submissions
+    slow = 1.0 * reference_runs.SLOWER_THAN_KEPT + 0.01
+    assert reference_runs.kept_reference_run(reference, "scene", slow, run) == ("answer 3", 1.0)
+    assert reference_runs.kept_reference_run(reference, "other test", 1.0, run) == ("answer 4", 1.0)
     other = SimpleNamespace(sandbox=SimpleNamespace(package_dir=Path(tmp_path) / "other"))
-    test_impulse.reference_run(other, 0.5)
-    assert len(runs) == 4                                   # another reference folder has its own run
+    assert reference_runs.kept_reference_run(other, "scene", None, run) == ("answer 5", 1.0)
+    assert len(runs) == 5
+
+
+def test_a_reference_run_without_a_time_is_not_kept(monkeypatch, tmp_path):
+    monkeypatch.setattr(reference_runs, "_KEPT", {})
+    reference = SimpleNamespace(sandbox=SimpleNamespace(package_dir=Path(tmp_path)))
+    runs = []
+    for _ in range(2):
+        assert reference_runs.kept_reference_run(reference, "scene", 1.0, lambda: runs.append(1) or (None, None)) == (
+            None, None)
+    assert len(runs) == 2

@@ -25,6 +25,7 @@ import pytest
 from grader.sandbox.codec import encode_body, encode_contact, is_number
 from grader.harness.compare import as_vector, number, show, vector
 from grader.harness.credit import check_cases, fail
+from grader.harness.reference_runs import kept_reference_run
 from grader.harness.student_code import register
 from grader.oracles.impulse_sympy import show_body, show_contact
 from solutions.body import Body
@@ -407,30 +408,6 @@ def first_differing_call(student, step: int, expected: np.ndarray, restitution: 
             "so the difference comes from elsewhere in your package (Body, Contact, or the vector helpers they use)")
 
 
-#: The reference's run of the ball scene, kept per grading process: its trajectory is the
-#: same for every submission, and stepping it in the reference's sandbox cost about 1 s of
-#: processor time per submission.  Its time, the figure shown beside the student's, is
-#: measured again side by side every REFERENCE_RUNS_KEPT submissions, and whenever the
-#: student's time is more than SLOWER_THAN_KEPT times the kept figure (a load that rose
-#: since must not make the student look slow).  {reference package folder: [trajectory,
-#: seconds, submissions it served]}.
-_REFERENCE_RUNS: dict[str, list] = {}
-REFERENCE_RUNS_KEPT = 8
-SLOWER_THAN_KEPT = 1.5
-
-
-def reference_run(reference, student_seconds: float) -> tuple[np.ndarray, float]:
-    """(trajectory, seconds) of the ball scene stepped with the reference, kept or run again
-    (see :data:`_REFERENCE_RUNS`)."""
-    key = str(reference.sandbox.package_dir.resolve())
-    kept = _REFERENCE_RUNS.get(key)
-    if kept is None or kept[2] >= REFERENCE_RUNS_KEPT or student_seconds > SLOWER_THAN_KEPT * kept[1]:
-        expected, _, seconds = run_scene(reference, "the reference")
-        kept = _REFERENCE_RUNS[key] = [expected, seconds, 0]
-    kept[2] += 1
-    return kept[0], kept[1]
-
-
 @pytest.mark.points(3)
 @pytest.mark.visibility("after_published")
 @pytest.mark.leaderboard("resolver scene time (s)")
@@ -446,7 +423,10 @@ def test_scene(student, reference, metrics):
     metrics.update(trajectory_metrics(trajectory, radius))
     oracle = pymunk_trajectory(1 / 60)
     metrics["distance_from_pymunk"] = rms_distance(trajectory[-1], oracle[-1])
-    expected, reference_seconds = reference_run(reference, seconds)
+    # Kept per grading process: the same trajectory for every submission, timed again side by side
+    # every few submissions and when the student's time is well over the kept one.
+    expected, reference_seconds = kept_reference_run(
+        reference, "ball scene", seconds, lambda: run_scene(reference, "the reference")[::2])
     metrics["reference_seconds"] = reference_seconds
     metrics["reference_max_penetration"] = trajectory_metrics(expected, radius)["max_penetration"]
     distance = rms_distance(trajectory[-1], expected[-1])

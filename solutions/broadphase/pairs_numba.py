@@ -26,6 +26,7 @@ from .grid_numba import (DENSE_STRIPS_PER_ENTRY, body_strips, check_and_measure,
 from .sorted_grid_numpy import DEFAULT_MAX_STRIPS_PER_BODY, MAX_STRIP_INDEX
 from ..narrowphase.box_pairs_numba import faces_of_boxes
 from ..compiled_cache import forget_stale_machine_code
+from ..compiled_views import contiguous_view
 
 
 #: The candidate pairs come from the strip grid of
@@ -46,8 +47,8 @@ def faces_and_aabbs(position, angle, half, margin, circles, corner_rounding, wor
     body's widened AABB (:func:`aabbs`), made at the start of the work space
     ``work_floats`` (16 n and 4 n values), as views (n, 2, 4, 2) and (n, 4)."""
     n = position.shape[0]
-    faces = work_floats[:16 * n].reshape((n, 2, 4, 2))
-    aabb = work_floats[16 * n:20 * n].reshape((n, 4))
+    faces = contiguous_view(work_floats[:16 * n], (n, 2, 4, 2))
+    aabb = contiguous_view(work_floats[16 * n:20 * n], (n, 4))
     if not circles:
         faces_of_boxes(position, half, angle, corner_rounding, faces)
     aabbs(position, half, faces, margin, circles, aabb)

@@ -49,6 +49,7 @@ from .polygon_polygon import KEEP_POINT_TOL, REFERENCE_FACE_ABSOLUTE_TOL, REFERE
 from .speculative import SPECULATIVE_MARGIN
 from .speculative_batch import BoxManifolds
 from ..compiled_cache import forget_stale_machine_code
+from ..compiled_views import contiguous_view
 
 #: ``ROUNDOFF_ULPS * EPS``, the first factor of ``rounding_tolerance`` (evaluated as there).
 _ULPS_EPS = ROUNDOFF_ULPS * EPS
@@ -266,7 +267,7 @@ def indexed_manifolds(faces, box_a, box_b, margin, incident_rounding, ints, floa
     found[:m], count[:m], reference_is_b[:m] = 0, 0, 0
     ints[MANIFOLD_REFERENCE_FACE:, :m] = -1
     floats[:, :m] = np.nan
-    segment, midpoints = clipping_floats[0:4].reshape((2, 2)), clipping_floats[4:8].reshape((2, 2))
+    segment, midpoints = contiguous_view(clipping_floats[0:4], (2, 2)), contiguous_view(clipping_floats[4:8], (2, 2))
     point_separations, ids = clipping_floats[8:10], clipping_ints
     for k in range(m):
         a, b = box_a[k], box_b[k]

@@ -29,6 +29,7 @@ from .soft_step_layout import (PARAMETER_DT_RATIO, PARAMETER_MATCH_DISTANCE, PAR
                                POINT_Y, SWITCH_BLOCK_SOLVER, SWITCH_COLOURS, SWITCH_FRICTION, SWITCH_ROTATION,
                                SWITCH_WARM_START, take)
 from ..compiled_cache import forget_stale_machine_code
+from ..compiled_views import contiguous_view
 
 
 @njit(cache=True, _nrt=False)     # (without reference counts: see soft_step_numba._step_on_pairs)
@@ -143,13 +144,13 @@ def prepare(keys, key_i, key_j, features, manifold_ints, manifold_floats, positi
     # Each array below is a row of a block of the work space (allocations were half the
     # cost of a step of a small world).
     block, ii = take(work_ints, ii, 5 * g_count)
-    group_ints = block.reshape((5, g_count))
+    group_ints = contiguous_view(block, (5, g_count))
     man_pair, man_count, man_first = group_ints[0], group_ints[1], group_ints[2]
     block, ii = take(work_ints, ii, 6 * p_count)
-    point_ints = block.reshape((6, p_count))
+    point_ints = contiguous_view(block, (6, p_count))
     a, b, feature, pair_key = point_ints[0], point_ints[1], point_ints[2], point_ints[3]
     block, fi = take(work_floats, fi, 27 * p_count)
-    points_in_order = block.reshape((27, p_count))      # manifold order
+    points_in_order = contiguous_view(block, (27, p_count))      # manifold order
     nx, ny, px, py, sep = (points_in_order[0], points_in_order[1], points_in_order[2], points_in_order[3],
                            points_in_order[4])
     g = 0
@@ -171,14 +172,14 @@ def prepare(keys, key_i, key_j, features, manifold_ints, manifold_floats, positi
     # The prestep.
     # Without rotation the contacts see no inertia and no angular velocity.
     block, fi = take(work_floats, fi, 8 * n)
-    body_floats = block[:2 * n].reshape((2, n))
+    body_floats = contiguous_view(block[:2 * n], (2, n))
     body_floats[:] = 0.0
     contact_inertia = inverse_inertia if rotation else body_floats[0]
     start_angle = body_floats[1]
-    body_work = block[4 * n:].reshape((4, n))       # separations' work space
+    body_work = contiguous_view(block[4 * n:], (4, n))       # separations' work space
     for i in range(n):      # (loops, not slice copies: those may allocate, to guard against overlap)
         start_angle[i] = angle[i]
-    centre = block[2 * n:4 * n].reshape((n, 2))
+    centre = contiguous_view(block[2 * n:4 * n], (n, 2))
     for i in range(n):
         centre[i, 0], centre[i, 1] = position[i, 0], position[i, 1]
     column = points_in_order
@@ -226,7 +227,7 @@ def prepare(keys, key_i, key_j, features, manifold_ints, manifold_floats, positi
     # The rows in sweep order (ContactPreparation._sweep_rows).
     ii += p_count + old_key.shape[0]      # (the matching's work space)
     block, ii = take(work_ints, ii, 2 * n)
-    body_flags = block.reshape((2, n))
+    body_flags = contiguous_view(block, (2, n))
     body_flags[:] = 0
     movable, in_contact = body_flags[0], body_flags[1]
     for i in range(n):
@@ -240,7 +241,7 @@ def prepare(keys, key_i, key_j, features, manifold_ints, manifold_floats, positi
     order, sweep_position = point_ints[4], point_ints[5]
     # The kernel's blocks (solutions.solver.kernel_numba): groups and rows in sweep order.
     block, ii = take(work_ints, ii, 5 * g_count)
-    groups = block.reshape((5, g_count))
+    groups = contiguous_view(block, (5, g_count))
     groups[:] = 0
     g_a, g_b, first, row_count = groups[GROUP_A], groups[GROUP_B], groups[GROUP_FIRST], groups[GROUP_COUNT]
     solved_as_block = groups[GROUP_BLOCK]
@@ -252,7 +253,7 @@ def prepare(keys, key_i, key_j, features, manifold_ints, manifold_floats, positi
             order[r] = man_first[src] + s
             r += 1
     block, fi = take(work_floats, fi, 9 * g_count)
-    group_floats = block.reshape((9, g_count))
+    group_floats = contiguous_view(block, (9, g_count))
     group_floats[:] = 0.0
     g_nx, g_ny, g_ima, g_imb, g_iia = group_floats[0], group_floats[1], group_floats[2], group_floats[3], group_floats[4]
     g_iib, k11, k12, k22 = group_floats[5], group_floats[6], group_floats[7], group_floats[8]
@@ -270,12 +271,13 @@ def prepare(keys, key_i, key_j, features, manifold_ints, manifold_floats, positi
                 k11[q], k12[q], k22[q] = c11, c12, c22
     block, fi = take(work_floats, fi, 19 * p_count)
     block[:] = 0.0
-    rows = block[:8 * p_count].reshape((8, p_count))    # ROW_*: rn_a, rn_b, rt_a, rt_b, masses, friction, lower bound
+    # ROW_*: rn_a, rn_b, rt_a, rt_b, masses, friction, lower bound; SOLUTION_*: impulses, targets, scales, work
+    rows = contiguous_view(block[:8 * p_count], (8, p_count))
     s_rn_a, s_rn_b, s_rt_a, s_rt_b, s_mass_normal = rows[0], rows[1], rows[2], rows[3], rows[4]
     s_mass_tangent, s_mu = rows[5], rows[6]
-    solution = block[8 * p_count:14 * p_count].reshape((6, p_count))  # SOLUTION_*: impulses, targets, scales, work
+    solution = contiguous_view(block[8 * p_count:14 * p_count], (6, p_count))
     normal_s, tangent_s = solution[SOLUTION_NORMAL], solution[SOLUTION_TANGENT]
-    row_extra = block[14 * p_count:].reshape((5, p_count))
+    row_extra = contiguous_view(block[14 * p_count:], (5, p_count))
     bias_rate, mass_scale_soft, impulse_scale_soft = row_extra[0], row_extra[1], row_extra[2]
     max_normal, separation = row_extra[3], row_extra[4]
     for r in range(p_count):

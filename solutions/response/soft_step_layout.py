@@ -16,6 +16,7 @@ from numba import njit
 
 from ..narrowphase.box_pairs_numba import CLIPPING_FLOATS, CLIPPING_INTS, MANIFOLD_FLOATS, MANIFOLD_INTS
 from ..compiled_cache import forget_stale_machine_code
+from ..compiled_views import contiguous_view
 
 #: Columns of the contact points' integer array: pair key ``i * n + j``, feature id, bodies.
 POINT_PAIR, POINT_FEATURE, POINT_A, POINT_B = range(4)
@@ -128,10 +129,12 @@ def sections(n, ints, floats):
     (switches_at, figures_at, joint_ints_at, memory_ints_at, work_ints_at, ints_end, joint_floats_at,
      impulses_at, memory_floats_at, work_floats_at, floats_end) = layout(n, joints, capacity)
     return (ints[switches_at:figures_at], ints[figures_at:joint_ints_at],
-            ints[joint_ints_at:memory_ints_at].reshape((3, joints)),
-            ints[memory_ints_at:work_ints_at].reshape((2, 2 * capacity, 4)), ints[work_ints_at:ints_end],
-            floats[:joint_floats_at], floats[joint_floats_at:impulses_at].reshape((joints, 7)), floats[impulses_at:memory_floats_at],
-            floats[memory_floats_at:work_floats_at].reshape((2, 2 * capacity, 7)), floats[work_floats_at:floats_end])
+            contiguous_view(ints[joint_ints_at:memory_ints_at], (3, joints)),
+            contiguous_view(ints[memory_ints_at:work_ints_at], (2, 2 * capacity, 4)), ints[work_ints_at:ints_end],
+            floats[:joint_floats_at], contiguous_view(floats[joint_floats_at:impulses_at], (joints, 7)),
+            floats[impulses_at:memory_floats_at],
+            contiguous_view(floats[memory_floats_at:work_floats_at], (2, 2 * capacity, 7)),
+            floats[work_floats_at:floats_end])
 
 
 # Cached machine code compiled from older sources is forgotten (solutions.compiled_cache).

@@ -77,6 +77,7 @@ from ..solver.kernel_numba import (GROUP_BLOCK, SOLUTION_IMPULSE_SCALE, SOLUTION
 from .soft_step import JOINT_DAMPING_RATIO, JOINT_HERTZ, soft_coefficients
 from .solver_settings import SolverStats
 from ..compiled_cache import forget_stale_machine_code
+from ..compiled_views import contiguous_view
 from ..no_alias_compiler import NoAliasCompiler
 from ..narrowphase.circle_pairs_numba import CIRCLE_FEATURE, circle_manifolds
 from .contact_preparation_numba import prepare, separations
@@ -262,24 +263,24 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     few_j, ii = take(work_ints, ii, capacity)
     if n < STRIP_GRID_MIN_BODIES:       # 1. candidate pairs (for more bodies: _soft_step's)
         faces, aabb = faces_and_aabbs(position, angle, half, margin, circles, corner_rounding, work_floats)
-        m = few_candidate_pairs(aabb, inverse_mass, jointed, few_work, work_floats[20 * n:24 * n].reshape((n, 4)),
-                                 few_keys, few_i, few_j)
+        m = few_candidate_pairs(aabb, inverse_mass, jointed, few_work,
+                                contiguous_view(work_floats[20 * n:24 * n], (n, 4)), few_keys, few_i, few_j)
         if m < 0:
             return capacity + n
         keys, key_i, key_j = few_keys[:m], few_i[:m], few_j[:m]
     else:
-        faces = work_floats[:16 * n].reshape((n, 2, 4, 2))
+        faces = contiguous_view(work_floats[:16 * n], (n, 2, 4, 2))
     # 2. Speculative manifolds of every pair.
     m = keys.shape[0]
     if 2 * m > memory_ints.shape[1]:
         return m
     block, ii = take(work_ints, ii, 2 * m)
-    features = block.reshape((m, 2))
+    features = contiguous_view(block, (m, 2))
     features[:] = CIRCLE_FEATURE
     block, ii = take(work_ints, ii, MANIFOLD_INTS * m)
-    manifold_ints = block.reshape((MANIFOLD_INTS, m))
+    manifold_ints = contiguous_view(block, (MANIFOLD_INTS, m))
     block, fi = take(work_floats, fi, MANIFOLD_FLOATS * m)
-    manifold_floats = block.reshape((MANIFOLD_FLOATS, m))
+    manifold_floats = contiguous_view(block, (MANIFOLD_FLOATS, m))
     if circles:
         circle_manifolds(key_i, key_j, position, half, manifold_ints, manifold_floats)
     else:
@@ -304,7 +305,8 @@ def _step_on_pairs(keys, key_i, key_j, position, angle, velocity, properties, in
     joint_count = joint_a.shape[0]
     joint_block, ii = take(work_ints, ii, 6 * joint_count)
     joint_values, fi = take(work_floats, fi, 25 * joint_count)
-    joint_work = joint_rows(joint_block.reshape((6, joint_count)), joint_values.reshape((25, joint_count)))
+    joint_work = joint_rows(contiguous_view(joint_block, (6, joint_count)),
+                            contiguous_view(joint_values, (25, joint_count)))
     joint_rows_made = -1     # joint rows made at the current poses (-1: none yet)
     # The stages of World.step, in its order (each inlined).
     for _ in range(substeps):

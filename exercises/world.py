@@ -149,6 +149,19 @@ class WorldSettings(CountsChanges):
     soft: SoftStepSettings = field(default_factory=SoftStepSettings)
     backend: str = "python"
 
+    def __setattr__(self, name: str, value) -> None:
+        if name == "gravity":
+            # Kept as a tuple: changed by assignment only, which every step sees (a list
+            # edited in place would go unseen by a world that keeps its compiled settings).
+            given = value
+            try:
+                value = tuple(float(g) for g in given)
+            except (TypeError, ValueError):
+                value = ()
+            if len(value) != 2 or not all(math.isfinite(g) for g in value):
+                raise ValueError(f"gravity must be a finite (gx, gy), got {given!r}")
+        super().__setattr__(name, value)
+
     def __post_init__(self):
         if self.backend not in BACKENDS:
             raise ValueError(f"backend must be one of {BACKENDS}, got {self.backend!r}")
@@ -158,9 +171,6 @@ class WorldSettings(CountsChanges):
             raise ValueError(f"broad_phase must be one of {BROAD_PHASES}, got {self.broad_phase!r}")
         if int(self.substeps) != self.substeps or self.substeps < 1:
             raise ValueError(f"substeps must be a whole number >= 1, got {self.substeps}")
-        g = np.asarray(self.gravity, dtype=float)
-        if g.shape != (2,) or not np.all(np.isfinite(g)):
-            raise ValueError(f"gravity must be a finite (gx, gy), got {self.gravity}")
 
 
 @dataclass

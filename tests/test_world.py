@@ -8,6 +8,7 @@ import pytest
 from solutions import scene_metrics as metrics
 from solutions import world as world_module
 from solutions.body import Body
+from solutions.shapes import Circle
 from solutions.response.contact_solver import SolverSettings
 from solutions.scenes import KMH, SCENES, get_scene
 from solutions.world import World, WorldSettings
@@ -281,3 +282,23 @@ def test_a_solver_stage_before_begin_step_says_so(soft, stage):
             "end": lambda: solver.end_step(state, 0.01)}[stage]
     with pytest.raises(RuntimeError, match=r"call begin_step\(\) before"):
         call()
+
+
+@pytest.mark.parametrize("backend", ["python", "numba"])
+def test_gravity_is_changed_by_assignment_and_every_step_sees_it(backend):
+    """A list given as gravity is kept as a tuple (an in-place edit would go unseen by a
+    world that keeps its compiled settings between steps): assigning a new gravity turns
+    the fall around on the next step, in both backends."""
+    settings = WorldSettings(gravity=[0.0, -9.81], soft_step=True, backend=backend)
+    assert settings.gravity == (0.0, -9.81)
+    with pytest.raises(TypeError):
+        settings.gravity[1] = 9.81
+    with pytest.raises(ValueError, match="gravity"):
+        settings.gravity = (0.0,)
+    world = World([Body(Circle((0.0, 0.0), 0.5), position=(0.0, 10.0))], settings)
+    for _ in range(3):
+        world.step(1 / 60)
+    falling = world.bodies[0].velocity[1]
+    world.settings.gravity = (0.0, 9.81)
+    world.step(1 / 60)
+    assert falling < 0 and world.bodies[0].velocity[1] == pytest.approx(falling + 9.81 / 60, abs=1e-12)
